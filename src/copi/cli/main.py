@@ -1,0 +1,132 @@
+"""Entry point of the ``copi`` command.
+
+Errors on bad input (a CopiError, or an OSError on a path the user gave) are printed as
+one line and exit with code 2, without a traceback; usage errors are typer's (also 2).
+"""
+
+from __future__ import annotations
+
+import re
+import sys
+from pathlib import Path
+from typing import Annotated
+
+import numpy as np
+import typer
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.table import Table
+
+from copi.errors import CopiError
+
+app = typer.Typer(
+    name="copi",
+    help="Context-based Online Policy Instantiation: worlds, capabilities, experiments.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+)
+world_app = typer.Typer(help="Sample, show and import worlds.", no_args_is_help=True)
+app.add_typer(world_app, name="world")
+
+console = Console(stderr=True)
+out = Console()
+
+
+def progress() -> Progress:
+    """The progress bar used by long commands (on stderr; silent when not a terminal)."""
+    return Progress(
+        TextColumn("{task.description}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeElapsedColumn(),
+        console=console,
+        transient=True,
+    )
+
+
+def safe_name(name: str) -> str:
+    """A file name made from a world name."""
+    return re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("._") or "world"
+
+
+@world_app.command("sample")
+def world_sample(
+    output: Annotated[Path, typer.Option("-o", "--output", help="World file to write (JSON).")],
+    seed: Annotated[int, typer.Option("--seed", min=0, help="Seed of the draw.")] = 0,
+    count: Annotated[int, typer.Option("-n", "--count", min=1, help="Number of worlds.")] = 4,
+) -> None:
+    """Draw the paper's random worlds (4-12 sided polygons) into a world file.
+
+    World k is drawn from numpy's default_rng([seed, k]).
+    """
+    from copi.world import random_world, save_worlds
+
+    worlds = []
+    for k in range(count):
+        w = random_world(np.random.default_rng([seed, k]))
+        worlds.append(w.replace(name=f"{k:03d}-{len(w.boundary)}gon"))
+    output.parent.mkdir(parents=True, exist_ok=True)
+    save_worlds(worlds, output)
+    table = Table("world", "sides", "area", "width", "height", title=str(output))
+    for w in worlds:
+        x0, y0, x1, y1 = w.bounds
+        table.add_row(w.name, str(len(w.boundary)), f"{w.area:.0f}", f"{x1 - x0:.1f}", f"{y1 - y0:.1f}")
+    out.print(table)
+
+
+@world_app.command("show")
+def world_show(
+    world_file: Annotated[Path, typer.Argument(help="World file (JSON).")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="Directory for the pictures.")],
+    seed: Annotated[int, typer.Option("--seed", min=0, help="Seed of tasks and walks.")] = 0,
+    steps: Annotated[int, typer.Option("--steps", min=1, help="Random-walk steps.")] = 150,
+    gif: Annotated[bool, typer.Option("--gif", help="Also animate each walk as a GIF.")] = False,
+) -> None:
+    """Draw each world with a random-walk episode (PNG per world, plus worlds.png)."""
+    from copi.experiments import (
+        random_walk_episodes,
+        save_episode_gif,
+        save_episode_png,
+        save_overview_png,
+    )
+    from copi.world import load_worlds
+
+    worlds = load_worlds(world_file)
+    output.mkdir(parents=True, exist_ok=True)
+    written = []
+    with progress() as bar:
+        task = bar.add_task("random walks", total=len(worlds))
+        sims = random_walk_episodes(
+            worlds, seed=seed, steps=steps, progress=lambda _: bar.advance(task)
+        )
+        task = bar.add_task("pictures", total=len(sims))
+        for sim in sims:
+            stem = output / safe_name(sim.world.name)
+            written.append(save_episode_png(sim, stem.with_suffix(".png")))
+            if gif:
+                written.append(save_episode_gif(sim, stem.with_suffix(".gif")))
+            bar.advance(task)
+        written.append(save_overview_png(sims, output / "worlds.png"))
+    for path in written:
+        out.print(str(path))
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Run the command line; bad input ends with one line on stderr and exit code 2."""
+    try:
+        app(args=argv, prog_name="copi")
+    except CopiError as exc:
+        console.print(f"[red]copi: error:[/red] {exc}", highlight=False, markup=True)
+        sys.exit(2)
+    except OSError as exc:
+        where = f" {exc.filename}" if exc.filename else ""
+        console.print(f"[red]copi: error:[/red]{where}: {exc.strerror or exc}", highlight=False)
+        sys.exit(2)
+    except KeyboardInterrupt:
+        console.print("copi: interrupted")
+        sys.exit(130)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()

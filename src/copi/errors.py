@@ -1,0 +1,34 @@
+"""Exceptions raised by copi.
+
+Every error copi raises on bad input derives from :class:`CopiError`, and its message
+says what was expected and what was found, so that the command line can print it as one
+line and exit with code 2.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "CopiError",
+    "InvalidArgumentError",
+    "InvalidWorldError",
+    "WorldFileError",
+]
+
+
+class CopiError(Exception):
+    """Base class of all errors copi raises on bad input."""
+
+
+class InvalidArgumentError(CopiError, ValueError):
+    """An argument has the wrong shape, type or value (NaN, negative radius, ...)."""
+
+
+class InvalidWorldError(CopiError, ValueError):
+    """World geometry is invalid: not a simple polygon, a hole outside, holes crossing, ..."""
+
+
+class WorldFileError(CopiError, ValueError):
+    """A world file cannot be read: missing, not JSON, or not in copi's world format.
+
+    The message starts with ``path:line:column:`` when the place is known.
+    """

@@ -1,0 +1,95 @@
+"""Validation of array arguments: one clear message per mistake."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from copi.errors import InvalidArgumentError
+
+FloatArray = NDArray[np.float64]
+
+
+def as_points(value: Any, name: str, *, allow_single: bool = True) -> tuple[FloatArray, bool]:
+    """``value`` as a C-contiguous float64 array of shape (n, 2).
+
+    Returns the array and whether a single point of shape (2,) was given.
+    """
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InvalidArgumentError(f"{name} must be numbers of shape (n, 2); got {exc}") from None
+    single = arr.ndim == 1
+    if single and allow_single:
+        arr = arr[None, :]
+    if arr.ndim != 2 or arr.shape[1] != 2:
+        expected = "(2,) or (n, 2)" if allow_single else "(n, 2)"
+        raise InvalidArgumentError(f"{name} must have shape {expected}; got shape {np.shape(value)}")
+    check_finite(arr, name)
+    return np.ascontiguousarray(arr), single
+
+
+def as_vector(value: Any, name: str, *, length: int | None = None) -> FloatArray:
+    """``value`` as a finite float64 array of shape (n,) (or (length,))."""
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InvalidArgumentError(f"{name} must be numbers of shape (n,); got {exc}") from None
+    if arr.ndim != 1 or (length is not None and arr.shape[0] != length):
+        expected = f"({length},)" if length is not None else "(n,)"
+        raise InvalidArgumentError(f"{name} must have shape {expected}; got shape {arr.shape}")
+    check_finite(arr, name)
+    return np.ascontiguousarray(arr)
+
+
+def as_segments(value: Any, name: str = "segments") -> FloatArray:
+    """``value`` as a finite float64 array of shape (m, 4): rows (px, py, qx, qy)."""
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InvalidArgumentError(f"{name} must be numbers of shape (m, 4); got {exc}") from None
+    if arr.ndim != 2 or arr.shape[1] != 4:
+        raise InvalidArgumentError(f"{name} must have shape (m, 4); got shape {arr.shape}")
+    check_finite(arr, name)
+    return np.ascontiguousarray(arr)
+
+
+def as_discs(centers: Any, radii: Any) -> tuple[FloatArray, FloatArray]:
+    """Disc centres (d, 2) and radii (d,), both empty when ``centers`` is None."""
+    if centers is None:
+        if radii is not None:
+            raise InvalidArgumentError("radii given without centers")
+        return np.zeros((0, 2)), np.zeros(0)
+    c, _ = as_points(centers, "centers")
+    r = np.broadcast_to(np.asarray(radii, dtype=np.float64), (c.shape[0],)) if np.ndim(
+        radii
+    ) == 0 else as_vector(radii, "radii", length=c.shape[0])
+    r = np.ascontiguousarray(r, dtype=np.float64)
+    check_finite(r, "radii")
+    if np.any(r < 0):
+        raise InvalidArgumentError(f"radii must be >= 0; got {r[r < 0][0]}")
+    return c, r
+
+
+def positive(value: Any, name: str) -> float:
+    """``value`` as a finite float > 0."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise InvalidArgumentError(f"{name} must be a number; got {value!r}") from None
+    if not np.isfinite(v) or v <= 0:
+        raise InvalidArgumentError(f"{name} must be a finite number > 0; got {v}")
+    return v
+
+
+def check_finite(arr: NDArray[Any], name: str) -> None:
+    """Raise if ``arr`` holds NaN or infinity, naming the first bad index."""
+    bad = ~np.isfinite(arr)
+    if bad.any():
+        idx = tuple(int(i) for i in np.argwhere(bad)[0])
+        where = idx[0] if len(idx) == 1 else idx
+        raise InvalidArgumentError(
+            f"{name} must be finite; found {arr[tuple(idx)]} at index {where}"
+        )

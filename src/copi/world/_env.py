@@ -1,0 +1,197 @@
+"""Gymnasium environment of the navigation domain (``copi/Navigation-v0``)."""
+
+from __future__ import annotations
+
+from typing import Any, SupportsFloat
+
+import gymnasium
+import numpy as np
+from gymnasium import spaces
+from numpy.typing import NDArray
+
+from copi.errors import InvalidArgumentError
+from copi.world._generate import WorldParams, random_world
+from copi.world._sensor import RangeSensor
+from copi.world._simulator import Simulator, StepResult
+from copi.world._world import ObstacleSpec, World
+
+__all__ = ["NavigationEnv"]
+
+ObsType = NDArray[np.float32]
+
+
+class NavigationEnv(gymnasium.Env[ObsType, ObsType]):
+    """Reach a goal in a random polygon world among random-walking discs (paper §IV).
+
+    Each ``reset`` draws a world of :func:`~copi.world.random_world` (or runs the one in
+    ``options["world"]``, a :class:`~copi.world.World` or its JSON dict), a start and goal
+    and the moving obstacles, all from ``self.np_random``.
+
+    Observation
+        float32 vector of N + 2: the N ranges of the ring sensor (ray i at 2 pi i / N from
+        +x, world frame, in [0, max_range]) followed by the goal relative to the agent
+        (goal - position, agent steps), scaled down to fit in [-goal_range, goal_range]
+        when farther (direction kept).
+    Action
+        float32 velocity (vx, vy) in [-1, 1]^2; its norm is clipped to 1 (the agent's top
+        speed, one agent step per time step).
+    Reward
+        ``(d_prev - d) - 0.01 + 10 [goal reached] - 10 [contact]``, where d is the
+        straight-line distance to the goal: progress, a small time cost, the goal bonus,
+        and the collision penalty.
+    Termination
+        At the goal (within ``goal_tolerance``); at a contact with a moving obstacle when
+        ``terminate_on_collision`` (the default). Walls only stop the agent.
+    Truncation
+        After ``max_steps`` steps.
+    Info
+        ``contact``, ``blocked``, ``min_gap``, ``distance``, ``is_success``, ``world``.
+
+    Parameters
+    ----------
+    render_mode : {"rgb_array", None}
+    obstacles : int, (int, int) or ObstacleSpec, optional
+        Number of moving obstacles (or a range, or a full spec); the paper's 10-15 when None.
+    n_rays, max_range : sensor ring (32 rays, range 10 by default).
+    agent_radius : float
+    max_steps : int
+    terminate_on_collision : bool
+    goal_tolerance : float
+    min_distance : float
+        Least straight-line distance between start and goal.
+    goal_range : float
+        Bound of the goal part of the observation (1000 agent steps: beyond any world
+        copi draws, and beyond a 512 x 512 Moving AI map).
+    world_params : WorldParams, optional
+        The random world distribution.
+    """
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 10}
+
+    def __init__(
+        self,
+        render_mode: str | None = None,
+        *,
+        obstacles: int | tuple[int, int] | ObstacleSpec | None = None,
+        n_rays: int = 32,
+        max_range: float = 10.0,
+        agent_radius: float = 0.3,
+        max_steps: int = 500,
+        terminate_on_collision: bool = True,
+        goal_tolerance: float = 0.5,
+        min_distance: float = 10.0,
+        world_params: WorldParams | None = None,
+        goal_range: float = 1000.0,
+    ) -> None:
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise InvalidArgumentError(
+                f"render_mode must be one of {self.metadata['render_modes']} or None; "
+                f"got {render_mode!r}"
+            )
+        if int(max_steps) != max_steps or max_steps < 1:
+            raise InvalidArgumentError(f"max_steps must be a positive int; got {max_steps!r}")
+        self.render_mode = render_mode
+        self.sensor = RangeSensor(n_rays, max_range)
+        if obstacles is None or isinstance(obstacles, ObstacleSpec):
+            self.obstacle_spec = obstacles
+        else:
+            count = (obstacles, obstacles) if isinstance(obstacles, int) else tuple(obstacles)
+            self.obstacle_spec = ObstacleSpec(count=count)  # type: ignore[arg-type]
+        self.agent_radius = float(agent_radius)
+        self.max_steps = int(max_steps)
+        self.terminate_on_collision = bool(terminate_on_collision)
+        self.goal_tolerance = float(goal_tolerance)
+        self.min_distance = float(min_distance)
+        self.world_params = world_params or WorldParams()
+        self.goal_range = float(goal_range)
+        n = self.sensor.n_rays
+        low = np.concatenate([np.zeros(n), np.full(2, -self.goal_range)]).astype(np.float32)
+        high = np.concatenate([np.full(n, self.sensor.max_range), np.full(2, self.goal_range)])
+        self.observation_space = spaces.Box(low, high.astype(np.float32), dtype=np.float32)
+        self.action_space = spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
+        self.sim: Simulator | None = None
+        self._obs = np.zeros(n + 2, dtype=np.float32)
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[ObsType, dict[str, Any]]:
+        super().reset(seed=seed)
+        options = dict(options or {})
+        world = options.pop("world", None)
+        if options:
+            raise InvalidArgumentError(f"unknown reset options {sorted(options)}; expected 'world'")
+        if world is None:
+            world = random_world(self.np_random, params=self.world_params)
+        elif isinstance(world, dict):
+            world = World.from_dict(world)
+        elif not isinstance(world, World):
+            raise InvalidArgumentError(
+                f"options['world'] must be a World or its dict; got {type(world).__name__}"
+            )
+        self.sim = Simulator.from_world(
+            world,
+            self.np_random,
+            agent_radius=self.agent_radius,
+            sensor=self.sensor,
+            obstacles=self.obstacle_spec,
+            min_distance=self.min_distance,
+            goal_tolerance=self.goal_tolerance,
+            record=self.render_mode is not None,
+        )
+        return self._observation(), self._info(None)
+
+    def step(
+        self, action: ObsType
+    ) -> tuple[ObsType, SupportsFloat, bool, bool, dict[str, Any]]:
+        sim = self.sim
+        if sim is None:
+            raise gymnasium.error.ResetNeeded("call reset() before step()")
+        before = sim.distance
+        res = sim.step(action)
+        reward = (before - res.distance) - 0.01
+        if res.reached:
+            reward += 10.0
+        if res.contact:
+            reward -= 10.0
+        terminated = res.reached or (res.contact and self.terminate_on_collision)
+        truncated = not terminated and sim.t >= self.max_steps
+        return self._observation(), float(reward), terminated, truncated, self._info(res)
+
+    def _observation(self) -> ObsType:
+        sim = self.sim
+        assert sim is not None
+        n = self.sensor.n_rays
+        obs = self._obs.copy()
+        obs[:n] = sim.ranges
+        gx = sim.goal[0] - sim.position[0]
+        gy = sim.goal[1] - sim.position[1]
+        far = max(abs(gx), abs(gy))
+        if far > self.goal_range:
+            gx, gy = gx * self.goal_range / far, gy * self.goal_range / far
+        obs[n] = gx
+        obs[n + 1] = gy
+        return obs
+
+    def _info(self, res: StepResult | None) -> dict[str, Any]:
+        sim = self.sim
+        assert sim is not None
+        if res is None:
+            return {"distance": sim.distance, "world": sim.world.name, "is_success": False}
+        return {
+            "contact": res.contact,
+            "blocked": res.blocked,
+            "min_gap": res.min_gap,
+            "distance": res.distance,
+            "is_success": res.reached,
+            "world": sim.world.name,
+        }
+
+    def render(self) -> NDArray[np.uint8] | None:  # type: ignore[override]
+        if self.render_mode is None:
+            gymnasium.logger.warn("render() called without a render_mode; nothing drawn")
+            return None
+        if self.sim is None:
+            raise gymnasium.error.ResetNeeded("call reset() before render()")
+        from copi.world._render import render_rgb
+
+        return render_rgb(self.sim)

@@ -1,0 +1,177 @@
+"""World files: JSON, one world or a list of them (DESIGN.md, "World file")."""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from collections.abc import Iterable
+from json.decoder import JSONArray, JSONObject
+from json.scanner import py_make_scanner  # type: ignore[attr-defined]
+from pathlib import Path
+from typing import Any
+
+from copi.errors import CopiError, WorldFileError
+from copi.world._world import World
+
+__all__ = ["load_worlds", "save_worlds"]
+
+
+def load_worlds(path: str | os.PathLike[str]) -> list[World]:
+    """Read a world file: one world object or a list of them.
+
+    Raises
+    ------
+    WorldFileError
+        ``path:line:column: what was expected, what was found`` for a file that is
+        missing, not JSON, or not in the world format (the place of the offending world
+        or key is given when it can be found).
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> d = tempfile.mkdtemp()
+    >>> save_worlds([World([[0, 0], [4, 0], [4, 4]], name="tri")], os.path.join(d, "w.json"))
+    >>> [w.name for w in load_worlds(os.path.join(d, "w.json"))]
+    ['tri']
+    """
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise WorldFileError(f"{p}: no such world file") from None
+    except IsADirectoryError:
+        raise WorldFileError(f"{p}: is a directory, expected a JSON world file") from None
+    except UnicodeDecodeError:
+        raise WorldFileError(f"{p}: not a text file; expected JSON (UTF-8)") from None
+    except OSError as exc:
+        raise WorldFileError(f"{p}: cannot read ({exc.strerror})") from None
+    try:
+        data, starts = _parse_with_positions(text)
+    except json.JSONDecodeError as exc:
+        raise WorldFileError(f"{p}:{exc.lineno}:{exc.colno}: not valid JSON ({exc.msg})") from None
+    items = data if isinstance(data, list) else [data]
+    if isinstance(data, list) and not data:
+        raise WorldFileError(f"{p}:1:1: expected a world object or a non-empty list; got []")
+    worlds = []
+    for k, item in enumerate(items):
+        node = starts.child(k) if isinstance(data, list) else starts
+        try:
+            worlds.append(World.from_dict(item))
+        except CopiError as exc:
+            line, col = _line_col(text, node.locate(str(exc)))
+            label = f"world {k}: " if isinstance(data, list) and "world '" not in str(exc) else ""
+            raise WorldFileError(f"{p}:{line}:{col}: {label}{exc}") from None
+    return worlds
+
+
+def save_worlds(worlds: World | Iterable[World], path: str | os.PathLike[str]) -> None:
+    """Write worlds as a JSON list, atomically: an existing file is replaced only once the
+    new one is complete, so an interruption never leaves half a file."""
+    items = [worlds] if isinstance(worlds, World) else list(worlds)
+    for w in items:
+        if not isinstance(w, World):
+            raise WorldFileError(f"save_worlds takes World objects; got {type(w).__name__}")
+    p = Path(path)
+    if p.parent and not p.parent.exists():
+        raise WorldFileError(f"{p}: directory {p.parent} does not exist")
+    text = json.dumps([w.to_dict() for w in items], indent=1)
+    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent or ".")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text + "\n")
+        os.chmod(tmp, 0o666 & ~_umask())
+        os.replace(tmp, p)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+class _Node:
+    """Where a JSON value starts in the text, and where its children start."""
+
+    __slots__ = ("start", "children")
+
+    def __init__(self, start: int) -> None:
+        self.start = start
+        self.children: list[tuple[Any, _Node]] = []
+
+    def child(self, key: Any) -> _Node:
+        for k, node in self.children:
+            if k == key:
+                return node
+        return self
+
+    def locate(self, message: str) -> int:
+        """Best place for an error about this world: the key or hole it names, if any."""
+        for key in ("boundary", "holes", "start", "goal", "obstacles", "name"):
+            if key in message or (key == "holes" and "hole " in message):
+                node = self.child(key)
+                if key == "holes":
+                    for k, sub in node.children:
+                        if f"hole {k} " in message or f"holes {k} " in message:
+                            return sub.start
+                return node.start
+        return self.start
+
+
+def _parse_with_positions(text: str) -> tuple[Any, _Node]:
+    """json.loads that also returns the start offset of every value (for error lines).
+
+    The stock decoder keeps no positions; its pure-Python scanner calls hooks for objects
+    and arrays, which are wrapped here to record each member's offset."""
+    decoder = json.JSONDecoder()
+    stack: list[_Node] = []
+
+    def recording(scan_once: Any, node: _Node, is_object: bool) -> Any:
+        def scan(s: str, idx: int) -> Any:
+            child = _Node(idx)
+            key = _key_before(s, idx) if is_object else len(node.children)
+            node.children.append((key, child))
+            stack.append(child)
+            try:
+                return scan_once(s, idx)
+            finally:
+                stack.pop()
+
+        return scan
+
+    def parse_object(s_and_end: Any, strict: bool, scan_once: Any, *rest: Any) -> Any:
+        return JSONObject(s_and_end, strict, recording(scan_once, stack[-1], True), *rest)
+
+    def parse_array(s_and_end: Any, scan_once: Any) -> Any:
+        return JSONArray(s_and_end, recording(scan_once, stack[-1], False))
+
+    decoder.parse_object = parse_object  # type: ignore[method-assign]
+    decoder.parse_array = parse_array  # type: ignore[method-assign]
+    decoder.scan_once = py_make_scanner(decoder)
+    start = len(text) - len(text.lstrip())
+    root = _Node(start)
+    stack.append(root)
+    data = decoder.decode(text)
+    return data, root
+
+
+def _key_before(s: str, idx: int) -> str:
+    """The key of the object member whose value starts at ``idx``: the string before the
+    colon before it."""
+    close = s.rfind('"', 0, s.rfind(":", 0, idx))
+    open_ = close - 1
+    while open_ >= 0 and not (s[open_] == '"' and s[open_ - 1] != "\\"):
+        open_ -= 1
+    try:
+        return str(json.loads(s[open_ : close + 1]))
+    except json.JSONDecodeError:  # pragma: no cover - the decoder already accepted it
+        return ""
+
+
+def _line_col(text: str, offset: int) -> tuple[int, int]:
+    line = text.count("\n", 0, offset) + 1
+    col = offset - (text.rfind("\n", 0, offset) + 1) + 1
+    return line, col

@@ -1,0 +1,67 @@
+"""The ring range sensor (paper §IV: "a set of 32 ring-arranged range-sensors")."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from copi.errors import InvalidArgumentError
+from copi.geometry import ring_angles
+from copi.geometry._arrays import FloatArray, as_discs, as_points
+from copi.geometry._kernels import scan as _scan_kernel
+from copi.world._world import World
+
+__all__ = ["RangeSensor"]
+
+
+@dataclass(frozen=True)
+class RangeSensor:
+    """N range rays fixed to the world frame, ray i at angle 2 pi i / N from +x.
+
+    The navigation agent has no heading, so the ring does not turn with it (DESIGN.md).
+    Ranges are measured from the agent's centre to the first wall, hole edge or moving
+    disc, clipped to ``max_range``; a centre inside a disc reads 0 everywhere.
+
+    Examples
+    --------
+    >>> box = World([[0, 0], [20, 0], [20, 20], [0, 20]])
+    >>> RangeSensor(4).scan(box, [5.0, 15.0]).tolist()
+    [10.0, 5.0, 5.0, 10.0]
+    """
+
+    n_rays: int = 32
+    """Number of rays N."""
+    max_range: float = 10.0
+    """Readings are clipped to this range, in agent steps."""
+    angles: FloatArray = field(init=False, repr=False, compare=False)
+    cos: FloatArray = field(init=False, repr=False, compare=False)
+    sin: FloatArray = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        if isinstance(self.n_rays, bool) or int(self.n_rays) != self.n_rays or self.n_rays < 1:
+            raise InvalidArgumentError(f"n_rays must be a positive int; got {self.n_rays!r}")
+        mr = float(self.max_range)
+        if not np.isfinite(mr) or mr <= 0:
+            raise InvalidArgumentError(f"max_range must be a finite number > 0; got {mr}")
+        object.__setattr__(self, "n_rays", int(self.n_rays))
+        object.__setattr__(self, "max_range", mr)
+        angles = ring_angles(self.n_rays)
+        for name, arr in (("angles", angles), ("cos", np.cos(angles)), ("sin", np.sin(angles))):
+            arr = np.ascontiguousarray(arr)
+            arr.setflags(write=False)
+            object.__setattr__(self, name, arr)
+
+    def scan(
+        self, world: World, positions: Any, centers: Any = None, radii: Any = None
+    ) -> FloatArray:
+        """Readings from one position (2,) -> (N,), or many (b, 2) -> (b, N), at once.
+
+        ``centers``/``radii`` are the moving obstacles' discs, shared by all positions.
+        """
+        pts, single = as_points(positions, "positions")
+        c, r = as_discs(centers, radii)
+        out = np.empty((pts.shape[0], self.n_rays))
+        _scan_kernel(pts, self.cos, self.sin, world.segments, c, r, self.max_range, out)
+        return out[0] if single else out

@@ -1,0 +1,369 @@
+"""The static world: a polygon with holes, validated once and never changed."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import shapely
+from shapely.geometry import Polygon
+
+from copi.errors import CopiError, InvalidWorldError
+from copi.geometry import as_ring, clearance, orient, ring_crossings, ring_segments, signed_area
+from copi.geometry._arrays import FloatArray, as_vector
+
+__all__ = ["ObstacleSpec", "World"]
+
+
+def _pair(value: Any, name: str, *, integer: bool = False) -> tuple[float, float]:
+    """A number or a [lo, hi] pair as (lo, hi), checked finite, ordered and >= 0."""
+    if isinstance(value, bool):
+        raise InvalidWorldError(f"{name} must be a number or a [low, high] pair; got {value!r}")
+    if isinstance(value, int | float | np.integer | np.floating):
+        lo = hi = float(value)
+    elif isinstance(value, list | tuple) and len(value) == 2:
+        try:
+            lo, hi = float(value[0]), float(value[1])
+        except (TypeError, ValueError):
+            raise InvalidWorldError(
+                f"{name} must be a number or a [low, high] pair; got {value!r}"
+            ) from None
+    else:
+        raise InvalidWorldError(f"{name} must be a number or a [low, high] pair; got {value!r}")
+    if not (np.isfinite(lo) and np.isfinite(hi)) or lo < 0 or hi < lo:
+        raise InvalidWorldError(f"{name} must be finite with 0 <= low <= high; got {value!r}")
+    if integer and (lo != int(lo) or hi != int(hi)):
+        raise InvalidWorldError(f"{name} must be whole numbers; got {value!r}")
+    return lo, hi
+
+
+@dataclass(frozen=True)
+class ObstacleSpec:
+    """How many moving obstacles a world has, how large and how fast (paper §IV).
+
+    Defaults are the paper's: 10 to 15 discs random-walking at 0.6 of the agent's speed;
+    radii from 0.5 to 1.0 agent steps (the paper does not give sizes; DESIGN.md does).
+    """
+
+    count: tuple[int, int] = (10, 15)
+    """Number of obstacles, drawn uniformly from the inclusive range (low, high)."""
+    radius: tuple[float, float] = (0.5, 1.0)
+    """Disc radius in agent steps, drawn uniformly from (low, high) for each obstacle."""
+    speed: float = 0.6
+    """Distance moved per time step, in agent steps (the agent moves at most 1)."""
+
+    def __post_init__(self) -> None:
+        lo, hi = _pair(self.count, "obstacles.count", integer=True)
+        object.__setattr__(self, "count", (int(lo), int(hi)))
+        r = _pair(self.radius, "obstacles.radius")
+        if r[0] <= 0:
+            raise InvalidWorldError(f"obstacles.radius must be > 0; got {self.radius!r}")
+        object.__setattr__(self, "radius", r)
+        speed = _pair(self.speed, "obstacles.speed")
+        if speed[0] != speed[1]:
+            raise InvalidWorldError(f"obstacles.speed must be one number; got {self.speed!r}")
+        object.__setattr__(self, "speed", speed[0])
+
+    @classmethod
+    def from_dict(cls, data: Any) -> ObstacleSpec:
+        """From the JSON form ``{"count": 12, "radius": 0.75, "speed": 0.6}`` (all optional;
+        count and radius may be [low, high] pairs)."""
+        if not isinstance(data, dict):
+            raise InvalidWorldError(f"obstacles must be an object; got {type(data).__name__}")
+        unknown = sorted(set(data) - {"count", "radius", "speed"})
+        if unknown:
+            raise InvalidWorldError(
+                f"obstacles has unknown keys {unknown}; expected count, radius, speed"
+            )
+        default = cls()
+        return cls(
+            count=data.get("count", default.count),
+            radius=data.get("radius", default.radius),
+            speed=data.get("speed", default.speed),
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form; a (low, high) pair with low == high is written as one number."""
+
+        def short(p: tuple[float, float] | tuple[int, int]) -> Any:
+            return p[0] if p[0] == p[1] else list(p)
+
+        return {"count": short(self.count), "radius": short(self.radius), "speed": self.speed}
+
+
+@dataclass(frozen=True, eq=False)
+class World:
+    """A static navigation world: a simple polygon with polygonal holes (paper §IV).
+
+    The geometry is validated on construction and normalised: the boundary is stored
+    counter-clockwise, holes clockwise; arrays are read-only. Either orientation is
+    accepted on input.
+
+    Parameters
+    ----------
+    boundary : array_like of shape (n, 2)
+        Vertices of the outer wall, a simple polygon, in agent steps.
+    holes : sequence of array_like of shape (m, 2)
+        Static obstacles: simple polygons strictly inside the boundary, pairwise disjoint.
+    name : str
+        A label used in files, tables and pictures.
+    start, goal : array_like of shape (2,), optional
+        A fixed task; drawn at random by the simulator when missing.
+    obstacles : ObstacleSpec, optional
+        Moving obstacles; the paper's distribution when missing.
+
+    Raises
+    ------
+    InvalidWorldError
+        Saying what is wrong and where, e.g. ``boundary must be a simple polygon; edges 0
+        and 2 cross at (1.0, 1.0)``.
+
+    Examples
+    --------
+    >>> w = World([[0, 0], [10, 0], [10, 10], [0, 10]], [[[4, 4], [6, 4], [6, 6], [4, 6]]])
+    >>> w.area, w.segments.shape
+    (96.0, (8, 4))
+    >>> World([[0, 0], [2, 2], [2, 0], [0, 2]])
+    Traceback (most recent call last):
+    ...
+    copi.errors.InvalidWorldError: world 'world': boundary must be a simple polygon; edges 0 and 2 cross at (1.0, 1.0)
+    """
+
+    boundary: FloatArray
+    holes: tuple[FloatArray, ...] = ()
+    name: str = "world"
+    start: FloatArray | None = None
+    goal: FloatArray | None = None
+    obstacles: ObstacleSpec | None = None
+    segments: FloatArray = field(init=False, repr=False)
+    """All wall segments (boundary then holes), rows ``(px, py, qx, qy)``."""
+    polygon: Polygon = field(init=False, repr=False)
+    """The free space as a Shapely polygon (for sampling, drawing and reference checks)."""
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.name, str) or not self.name:
+            raise InvalidWorldError(f"world name must be a non-empty string; got {self.name!r}")
+        try:
+            self._validate()
+        except InvalidWorldError as exc:
+            raise InvalidWorldError(f"world {self.name!r}: {exc}") from None
+        except CopiError as exc:
+            raise InvalidWorldError(f"world {self.name!r}: {exc}") from None
+
+    def _validate(self) -> None:
+        boundary = _simple_ring(self.boundary, "boundary", ccw=True)
+        if isinstance(self.holes, np.ndarray) and self.holes.ndim == 2:
+            raise InvalidWorldError(
+                "holes must be a list of polygons (each a list of [x, y]); got one polygon"
+            )
+        holes = tuple(
+            _simple_ring(h, f"hole {k}", ccw=False) for k, h in enumerate(self.holes or ())
+        )
+        outer = Polygon(boundary)
+        hole_polys = [Polygon(h) for h in holes]
+        for k, hp in enumerate(hole_polys):
+            if not outer.contains(hp):
+                raise InvalidWorldError(_outside_message(k, holes[k], outer))
+        if len(hole_polys) > 1:
+            tree = shapely.STRtree(hole_polys)
+            a, b = tree.query(hole_polys, predicate="intersects")
+            pairs = [(int(i), int(j)) for i, j in zip(a, b, strict=True) if i < j]
+            if pairs:
+                i, j = pairs[0]
+                where = hole_polys[i].intersection(hole_polys[j]).representative_point()
+                raise InvalidWorldError(
+                    f"holes must be disjoint; holes {i} and {j} meet at "
+                    f"({where.x:.6g}, {where.y:.6g})"
+                )
+        polygon = Polygon(boundary, holes)
+        if not polygon.is_valid:  # pragma: no cover - the checks above catch known cases
+            raise InvalidWorldError(f"invalid polygon: {shapely.is_valid_reason(polygon)}")
+        for ring in (boundary, *holes):
+            ring.setflags(write=False)
+        segments = np.ascontiguousarray(np.vstack([ring_segments(r) for r in (boundary, *holes)]))
+        segments.setflags(write=False)
+        object.__setattr__(self, "boundary", boundary)
+        object.__setattr__(self, "holes", holes)
+        object.__setattr__(self, "segments", segments)
+        object.__setattr__(self, "polygon", polygon)
+        for key in ("start", "goal"):
+            value = getattr(self, key)
+            if value is None:
+                continue
+            p = as_vector(value, key, length=2)
+            if not shapely.contains_xy(polygon, p[0], p[1]):
+                raise InvalidWorldError(
+                    f"{key} ({p[0]:.6g}, {p[1]:.6g}) must lie in the free space "
+                    "(inside the boundary, outside every hole)"
+                )
+            p.setflags(write=False)
+            object.__setattr__(self, key, p)
+        if self.obstacles is not None and not isinstance(self.obstacles, ObstacleSpec):
+            raise InvalidWorldError(
+                f"obstacles must be an ObstacleSpec; got {type(self.obstacles).__name__}"
+            )
+
+    # -- derived quantities ---------------------------------------------------------
+
+    @property
+    def area(self) -> float:
+        """Area of the free space, in square agent steps."""
+        return float(self.polygon.area)
+
+    @property
+    def bounds(self) -> tuple[float, float, float, float]:
+        """(xmin, ymin, xmax, ymax) of the boundary."""
+        b = self.boundary
+        return (float(b[:, 0].min()), float(b[:, 1].min()), float(b[:, 0].max()), float(b[:, 1].max()))
+
+    def contains(self, points: Any) -> Any:
+        """Whether points lie in the free space (inside the boundary, outside holes).
+
+        Examples
+        --------
+        >>> World([[0, 0], [4, 0], [4, 4], [0, 4]]).contains([[1, 1], [5, 1]]).tolist()
+        [True, False]
+        """
+        p = np.asarray(points, dtype=np.float64)
+        return shapely.contains_xy(self.polygon, p[..., 0], p[..., 1])
+
+    def clearance(self, points: Any) -> Any:
+        """Distance from points to the nearest wall (boundary or hole edge)."""
+        return clearance(points, self.segments)
+
+    def replace(self, **changes: Any) -> World:
+        """A copy with some fields changed (the world itself never changes).
+
+        Examples
+        --------
+        >>> World([[0, 0], [4, 0], [4, 4], [0, 4]]).replace(name="box").name
+        'box'
+        """
+        fields = {
+            "boundary": self.boundary,
+            "holes": self.holes,
+            "name": self.name,
+            "start": self.start,
+            "goal": self.goal,
+            "obstacles": self.obstacles,
+        }
+        unknown = set(changes) - set(fields)
+        if unknown:
+            raise TypeError(f"World has no field(s) {sorted(unknown)}")
+        fields.update(changes)
+        return World(**fields)
+
+    # -- comparison and serialisation ----------------------------------------------
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, World):
+            return NotImplemented
+        return (
+            self.name == other.name
+            and np.array_equal(self.boundary, other.boundary)
+            and len(self.holes) == len(other.holes)
+            and all(np.array_equal(a, b) for a, b in zip(self.holes, other.holes, strict=True))
+            and _opt_equal(self.start, other.start)
+            and _opt_equal(self.goal, other.goal)
+            and self.obstacles == other.obstacles
+        )
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON form of DESIGN.md ("World file")."""
+        out: dict[str, Any] = {
+            "name": self.name,
+            "boundary": self.boundary.tolist(),
+            "holes": [h.tolist() for h in self.holes],
+        }
+        if self.start is not None:
+            out["start"] = self.start.tolist()
+        if self.goal is not None:
+            out["goal"] = self.goal.tolist()
+        if self.obstacles is not None:
+            out["obstacles"] = self.obstacles.to_dict()
+        return out
+
+    @classmethod
+    def from_dict(cls, data: Any) -> World:
+        """From the JSON form; unknown keys and wrong types are refused."""
+        if not isinstance(data, dict):
+            raise InvalidWorldError(f"a world must be a JSON object; got {_json_type(data)}")
+        allowed = {"name", "boundary", "holes", "start", "goal", "obstacles"}
+        unknown = sorted(set(data) - allowed)
+        if unknown:
+            raise InvalidWorldError(f"unknown keys {unknown}; expected some of {sorted(allowed)}")
+        if "boundary" not in data:
+            raise InvalidWorldError("missing key 'boundary' (a list of [x, y] vertices)")
+        holes = data.get("holes", [])
+        if not isinstance(holes, list):
+            raise InvalidWorldError(f"holes must be a list of polygons; got {_json_type(holes)}")
+        obstacles = data.get("obstacles")
+        return cls(
+            boundary=_coords(data["boundary"], "boundary"),
+            holes=tuple(_coords(h, f"hole {k}") for k, h in enumerate(holes)),
+            name=data.get("name", "world"),
+            start=_coords(data["start"], "start") if data.get("start") is not None else None,
+            goal=_coords(data["goal"], "goal") if data.get("goal") is not None else None,
+            obstacles=ObstacleSpec.from_dict(obstacles) if obstacles is not None else None,
+        )
+
+
+def _simple_ring(coords: Any, name: str, *, ccw: bool) -> FloatArray:
+    ring = as_ring(coords, name)
+    crossings = ring_crossings(ring)
+    if crossings:
+        i, j, (x, y) = crossings[0]
+        raise InvalidWorldError(
+            f"{name} must be a simple polygon; edges {i} and {j} cross at ({x:.6g}, {y:.6g})"
+        )
+    if abs(signed_area(ring)) <= 1e-12:
+        raise InvalidWorldError(f"{name} must enclose an area; its vertices are collinear")
+    return orient(ring, ccw=ccw)
+
+
+def _outside_message(k: int, hole: FloatArray, outer: Polygon) -> str:
+    inside = shapely.contains_xy(outer, hole[:, 0], hole[:, 1])
+    if not inside.all():
+        v = int(np.argmin(inside))
+        x, y = hole[v]
+        return (
+            f"hole {k} must lie strictly inside the boundary; its vertex {v} "
+            f"({x:.6g}, {y:.6g}) does not"
+        )
+    where = Polygon(hole).boundary.intersection(outer.boundary).representative_point()
+    return (
+        f"hole {k} must lie strictly inside the boundary; it meets the boundary at "
+        f"({where.x:.6g}, {where.y:.6g})"
+    )
+
+
+def _coords(value: Any, name: str) -> Any:
+    """Check the JSON shape of coordinates (numbers, not strings or objects)."""
+
+    def numeric(v: Any) -> bool:
+        if isinstance(v, list):
+            return all(numeric(x) for x in v)
+        return isinstance(v, int | float) and not isinstance(v, bool)
+
+    if not isinstance(value, list) or not numeric(value):
+        raise InvalidWorldError(f"{name} must be a list of numbers; got {_json_type(value)}")
+    return value
+
+
+def _json_type(value: Any) -> str:
+    names = {dict: "an object", list: "a list", str: "a string", bool: "a boolean"}
+    for t, n in names.items():
+        if isinstance(value, t):
+            return n
+    if value is None:
+        return "null"
+    return "a number" if isinstance(value, int | float) else type(value).__name__
+
+
+def _opt_equal(a: FloatArray | None, b: FloatArray | None) -> bool:
+    if a is None or b is None:
+        return a is None and b is None
+    return bool(np.array_equal(a, b))

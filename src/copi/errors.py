@@ -24,7 +24,16 @@ class InvalidArgumentError(CopiError, ValueError):
 
 
 class InvalidWorldError(CopiError, ValueError):
-    """World geometry is invalid: not a simple polygon, a hole outside, holes crossing, ..."""
+    """World geometry is invalid: not a simple polygon, a hole outside, holes crossing, ...
+
+    ``where`` is the path of the offending part in the world's JSON form, e.g.
+    ``("holes", 2)`` (empty when the world as a whole is at fault); world files use it to
+    point at the line.
+    """
+
+    def __init__(self, message: str, *, where: tuple[str | int, ...] = ()) -> None:
+        super().__init__(message)
+        self.where = where
 
 
 class WorldFileError(CopiError, ValueError):

@@ -71,7 +71,9 @@ def world_sample(
     table = Table("world", "sides", "area", "width", "height", title=str(output))
     for w in worlds:
         x0, y0, x1, y1 = w.bounds
-        table.add_row(w.name, str(len(w.boundary)), f"{w.area:.0f}", f"{x1 - x0:.1f}", f"{y1 - y0:.1f}")
+        table.add_row(
+            w.name, str(len(w.boundary)), f"{w.area:.0f}", f"{x1 - x0:.1f}", f"{y1 - y0:.1f}"
+        )
     out.print(table)
 
 

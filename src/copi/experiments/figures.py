@@ -64,6 +64,7 @@ def save_episode_gif(
     that at most ``max_frames`` frames are written.
     """
     from matplotlib.animation import FuncAnimation, PillowWriter
+    from matplotlib.artist import Artist
     from matplotlib.patches import Circle
 
     from copi.world import draw_world
@@ -78,9 +79,7 @@ def save_episode_gif(
     trace_lines = [
         ax.plot([], [], color="#3b6fb6", lw=0.6, alpha=0.45)[0] for _ in range(traces.shape[1])
     ]
-    discs = [
-        ax.add_patch(Circle((0, 0), r, fc="#3b6fb6", ec="none", alpha=0.8)) for r in sim.radii
-    ]
+    discs = [ax.add_patch(Circle((0, 0), r, fc="#3b6fb6", ec="none", alpha=0.8)) for r in sim.radii]
     (agent_line,) = ax.plot([], [], color="#d62728", lw=1.4, zorder=6)
     agent = ax.add_patch(Circle((0, 0), sim.agent_radius, fc="#d62728", ec="none", zorder=7))
     angles = sim.sensor.angles
@@ -88,7 +87,7 @@ def save_episode_gif(
     rays = ax.plot([], [], color="#f0a030", lw=0.4, zorder=4)[0]
     fig.tight_layout()
 
-    def frame(t: int) -> list[object]:
+    def frame(t: int) -> list[Artist]:
         for k, line in enumerate(trace_lines):
             line.set_data(traces[: t + 1, k, 0], traces[: t + 1, k, 1])
             discs[k].center = tuple(traces[t, k])
@@ -96,8 +95,12 @@ def save_episode_gif(
         agent.center = tuple(path_arr[t])
         ranges = sim.sensor.scan(sim.world, path_arr[t], traces[t], sim.radii)
         ends = path_arr[t] + ranges[:, None] * directions
-        xs = np.column_stack([np.full(len(ends), path_arr[t, 0]), ends[:, 0], np.full(len(ends), np.nan)])
-        ys = np.column_stack([np.full(len(ends), path_arr[t, 1]), ends[:, 1], np.full(len(ends), np.nan)])
+        xs = np.column_stack(
+            [np.full(len(ends), path_arr[t, 0]), ends[:, 0], np.full(len(ends), np.nan)]
+        )
+        ys = np.column_stack(
+            [np.full(len(ends), path_arr[t, 1]), ends[:, 1], np.full(len(ends), np.nan)]
+        )
         rays.set_data(xs.ravel(), ys.ravel())
         return [*trace_lines, *discs, agent_line, agent, rays]
 

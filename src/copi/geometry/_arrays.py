@@ -26,7 +26,9 @@ def as_points(value: Any, name: str, *, allow_single: bool = True) -> tuple[Floa
         arr = arr[None, :]
     if arr.ndim != 2 or arr.shape[1] != 2:
         expected = "(2,) or (n, 2)" if allow_single else "(n, 2)"
-        raise InvalidArgumentError(f"{name} must have shape {expected}; got shape {np.shape(value)}")
+        raise InvalidArgumentError(
+            f"{name} must have shape {expected}; got shape {np.shape(value)}"
+        )
     check_finite(arr, name)
     return np.ascontiguousarray(arr), single
 
@@ -63,9 +65,11 @@ def as_discs(centers: Any, radii: Any) -> tuple[FloatArray, FloatArray]:
             raise InvalidArgumentError("radii given without centers")
         return np.zeros((0, 2)), np.zeros(0)
     c, _ = as_points(centers, "centers")
-    r = np.broadcast_to(np.asarray(radii, dtype=np.float64), (c.shape[0],)) if np.ndim(
-        radii
-    ) == 0 else as_vector(radii, "radii", length=c.shape[0])
+    r = (
+        np.broadcast_to(np.asarray(radii, dtype=np.float64), (c.shape[0],))
+        if np.ndim(radii) == 0
+        else as_vector(radii, "radii", length=c.shape[0])
+    )
     r = np.ascontiguousarray(r, dtype=np.float64)
     check_finite(r, "radii")
     if np.any(r < 0):

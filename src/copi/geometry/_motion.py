@@ -76,4 +76,3 @@ def clearance(points: Any, segments: Any) -> FloatArray:
     else:
         _kernels.clearance(pts, segs, out)
     return out[0] if single else out
-

@@ -24,7 +24,7 @@ def as_ring(coords: Any, name: str = "ring") -> FloatArray:
     [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]]
     """
     pts, _ = as_points(coords, name, allow_single=False)
-    keep = np.any(pts != np.roll(pts, 1, axis=0), axis=1)
+    keep = np.any(pts != np.roll(pts, -1, axis=0), axis=1)
     if not keep.any():
         keep[0] = True
     pts = pts[keep]

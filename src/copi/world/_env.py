@@ -140,9 +140,7 @@ class NavigationEnv(gymnasium.Env[ObsType, ObsType]):
         )
         return self._observation(), self._info(None)
 
-    def step(
-        self, action: ObsType
-    ) -> tuple[ObsType, SupportsFloat, bool, bool, dict[str, Any]]:
+    def step(self, action: ObsType) -> tuple[ObsType, SupportsFloat, bool, bool, dict[str, Any]]:
         sim = self.sim
         if sim is None:
             raise gymnasium.error.ResetNeeded("call reset() before step()")

@@ -61,7 +61,9 @@ class WorldParams:
             )
 
 
-def random_world(seed: Seed = None, *, params: WorldParams | None = None, name: str | None = None) -> World:
+def random_world(
+    seed: Seed = None, *, params: WorldParams | None = None, name: str | None = None
+) -> World:
     """Draw one of the paper's random worlds: a polygon of 4 to 12 sides (no holes).
 
     See :class:`WorldParams` for the distribution. Start, goal and obstacles are left

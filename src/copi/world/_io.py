@@ -6,12 +6,12 @@ import json
 import os
 import tempfile
 from collections.abc import Iterable
-from json.decoder import JSONArray, JSONObject
+from json.decoder import JSONArray, JSONObject  # type: ignore[attr-defined]
 from json.scanner import py_make_scanner  # type: ignore[attr-defined]
 from pathlib import Path
 from typing import Any
 
-from copi.errors import CopiError, WorldFileError
+from copi.errors import CopiError, InvalidWorldError, WorldFileError
 from copi.world._world import World
 
 __all__ = ["load_worlds", "save_worlds"]
@@ -59,7 +59,8 @@ def load_worlds(path: str | os.PathLike[str]) -> list[World]:
         try:
             worlds.append(World.from_dict(item))
         except CopiError as exc:
-            line, col = _line_col(text, node.locate(str(exc)))
+            where = exc.where if isinstance(exc, InvalidWorldError) else ()
+            line, col = _line_col(text, node.find(where).start)
             label = f"world {k}: " if isinstance(data, list) and "world '" not in str(exc) else ""
             raise WorldFileError(f"{p}:{line}:{col}: {label}{exc}") from None
     return worlds
@@ -108,17 +109,15 @@ class _Node:
                 return node
         return self
 
-    def locate(self, message: str) -> int:
-        """Best place for an error about this world: the key or hole it names, if any."""
-        for key in ("boundary", "holes", "start", "goal", "obstacles", "name"):
-            if key in message or (key == "holes" and "hole " in message):
-                node = self.child(key)
-                if key == "holes":
-                    for k, sub in node.children:
-                        if f"hole {k} " in message or f"holes {k} " in message:
-                            return sub.start
-                return node.start
-        return self.start
+    def find(self, where: tuple[str | int, ...]) -> _Node:
+        """The deepest node along the JSON path ``where`` that exists."""
+        node = self
+        for key in where:
+            nxt = node.child(key)
+            if nxt is node:
+                break
+            node = nxt
+        return node
 
 
 def _parse_with_positions(text: str) -> tuple[Any, _Node]:
@@ -148,9 +147,9 @@ def _parse_with_positions(text: str) -> tuple[Any, _Node]:
     def parse_array(s_and_end: Any, scan_once: Any) -> Any:
         return JSONArray(s_and_end, recording(scan_once, stack[-1], False))
 
-    decoder.parse_object = parse_object  # type: ignore[method-assign]
-    decoder.parse_array = parse_array  # type: ignore[method-assign]
-    decoder.scan_once = py_make_scanner(decoder)
+    decoder.parse_object = parse_object  # type: ignore[attr-defined]
+    decoder.parse_array = parse_array  # type: ignore[attr-defined]
+    decoder.scan_once = py_make_scanner(decoder)  # type: ignore[attr-defined]
     start = len(text) - len(text.lstrip())
     root = _Node(start)
     stack.append(root)

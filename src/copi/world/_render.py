@@ -95,7 +95,9 @@ def draw_world(
     return ax
 
 
-def draw_simulator(ax: Axes, sim: Simulator, *, rays: bool = True, title: str | None = None) -> Axes:
+def draw_simulator(
+    ax: Axes, sim: Simulator, *, rays: bool = True, title: str | None = None
+) -> Axes:
     """Draw the current state of a simulator, with its recorded path and traces."""
     return draw_world(
         ax,

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import dataclasses
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -10,10 +13,21 @@ import shapely
 from shapely.geometry import Polygon
 
 from copi.errors import CopiError, InvalidWorldError
-from copi.geometry import as_ring, clearance, orient, ring_crossings, ring_segments, signed_area
+from copi.geometry import as_ring, clearance, orient, ring_crossings, ring_segments
 from copi.geometry._arrays import FloatArray, as_vector
 
 __all__ = ["ObstacleSpec", "World"]
+
+
+@contextmanager
+def _at(*where: str | int) -> Iterator[None]:
+    """Attach the JSON path ``where`` to errors raised inside (unless they have one)."""
+    try:
+        yield
+    except CopiError as exc:
+        if isinstance(exc, InvalidWorldError) and exc.where:
+            raise
+        raise InvalidWorldError(str(exc), where=where) from None
 
 
 def _pair(value: Any, name: str, *, integer: bool = False) -> tuple[float, float]:
@@ -124,10 +138,11 @@ class World:
     >>> w = World([[0, 0], [10, 0], [10, 10], [0, 10]], [[[4, 4], [6, 4], [6, 6], [4, 6]]])
     >>> w.area, w.segments.shape
     (96.0, (8, 4))
-    >>> World([[0, 0], [2, 2], [2, 0], [0, 2]])
-    Traceback (most recent call last):
-    ...
-    copi.errors.InvalidWorldError: world 'world': boundary must be a simple polygon; edges 0 and 2 cross at (1.0, 1.0)
+    >>> try:
+    ...     World([[0, 0], [2, 2], [2, 0], [0, 2]])
+    ... except InvalidWorldError as err:
+    ...     print(err)
+    world 'world': boundary must be a simple polygon; edges 0 and 2 cross at (1, 1)
     """
 
     boundary: FloatArray
@@ -146,25 +161,28 @@ class World:
             raise InvalidWorldError(f"world name must be a non-empty string; got {self.name!r}")
         try:
             self._validate()
-        except InvalidWorldError as exc:
-            raise InvalidWorldError(f"world {self.name!r}: {exc}") from None
         except CopiError as exc:
-            raise InvalidWorldError(f"world {self.name!r}: {exc}") from None
+            where = exc.where if isinstance(exc, InvalidWorldError) else ()
+            raise InvalidWorldError(f"world {self.name!r}: {exc}", where=where) from None
 
     def _validate(self) -> None:
-        boundary = _simple_ring(self.boundary, "boundary", ccw=True)
+        with _at("boundary"):
+            boundary = _simple_ring(self.boundary, "boundary")
         if isinstance(self.holes, np.ndarray) and self.holes.ndim == 2:
             raise InvalidWorldError(
-                "holes must be a list of polygons (each a list of [x, y]); got one polygon"
+                "holes must be a list of polygons (each a list of [x, y]); got one polygon",
+                where=("holes",),
             )
-        holes = tuple(
-            _simple_ring(h, f"hole {k}", ccw=False) for k, h in enumerate(self.holes or ())
-        )
+        given = []
+        for k, h in enumerate(self.holes or ()):
+            with _at("holes", k):
+                given.append(_simple_ring(h, f"hole {k}"))
+        holes = tuple(given)
         outer = Polygon(boundary)
         hole_polys = [Polygon(h) for h in holes]
         for k, hp in enumerate(hole_polys):
             if not outer.contains(hp):
-                raise InvalidWorldError(_outside_message(k, holes[k], outer))
+                raise InvalidWorldError(_outside_message(k, holes[k], outer), where=("holes", k))
         if len(hole_polys) > 1:
             tree = shapely.STRtree(hole_polys)
             a, b = tree.query(hole_polys, predicate="intersects")
@@ -174,8 +192,11 @@ class World:
                 where = hole_polys[i].intersection(hole_polys[j]).representative_point()
                 raise InvalidWorldError(
                     f"holes must be disjoint; holes {i} and {j} meet at "
-                    f"({where.x:.6g}, {where.y:.6g})"
+                    f"({where.x:.6g}, {where.y:.6g})",
+                    where=("holes", j),
                 )
+        boundary = orient(boundary, ccw=True)
+        holes = tuple(orient(h, ccw=False) for h in holes)
         polygon = Polygon(boundary, holes)
         if not polygon.is_valid:  # pragma: no cover - the checks above catch known cases
             raise InvalidWorldError(f"invalid polygon: {shapely.is_valid_reason(polygon)}")
@@ -191,17 +212,20 @@ class World:
             value = getattr(self, key)
             if value is None:
                 continue
-            p = as_vector(value, key, length=2)
+            with _at(key):
+                p = as_vector(value, key, length=2)
             if not shapely.contains_xy(polygon, p[0], p[1]):
                 raise InvalidWorldError(
                     f"{key} ({p[0]:.6g}, {p[1]:.6g}) must lie in the free space "
-                    "(inside the boundary, outside every hole)"
+                    "(inside the boundary, outside every hole)",
+                    where=(key,),
                 )
             p.setflags(write=False)
             object.__setattr__(self, key, p)
         if self.obstacles is not None and not isinstance(self.obstacles, ObstacleSpec):
             raise InvalidWorldError(
-                f"obstacles must be an ObstacleSpec; got {type(self.obstacles).__name__}"
+                f"obstacles must be an ObstacleSpec; got {type(self.obstacles).__name__}",
+                where=("obstacles",),
             )
 
     # -- derived quantities ---------------------------------------------------------
@@ -215,7 +239,12 @@ class World:
     def bounds(self) -> tuple[float, float, float, float]:
         """(xmin, ymin, xmax, ymax) of the boundary."""
         b = self.boundary
-        return (float(b[:, 0].min()), float(b[:, 1].min()), float(b[:, 0].max()), float(b[:, 1].max()))
+        return (
+            float(b[:, 0].min()),
+            float(b[:, 1].min()),
+            float(b[:, 0].max()),
+            float(b[:, 1].max()),
+        )
 
     def contains(self, points: Any) -> Any:
         """Whether points lie in the free space (inside the boundary, outside holes).
@@ -240,19 +269,7 @@ class World:
         >>> World([[0, 0], [4, 0], [4, 4], [0, 4]]).replace(name="box").name
         'box'
         """
-        fields = {
-            "boundary": self.boundary,
-            "holes": self.holes,
-            "name": self.name,
-            "start": self.start,
-            "goal": self.goal,
-            "obstacles": self.obstacles,
-        }
-        unknown = set(changes) - set(fields)
-        if unknown:
-            raise TypeError(f"World has no field(s) {sorted(unknown)}")
-        fields.update(changes)
-        return World(**fields)
+        return dataclasses.replace(self, **changes)
 
     # -- comparison and serialisation ----------------------------------------------
 
@@ -288,40 +305,61 @@ class World:
 
     @classmethod
     def from_dict(cls, data: Any) -> World:
-        """From the JSON form; unknown keys and wrong types are refused."""
+        """From the JSON form; unknown keys and wrong types are refused.
+
+        Every error names the world and carries the JSON path of the offending part."""
         if not isinstance(data, dict):
             raise InvalidWorldError(f"a world must be a JSON object; got {_json_type(data)}")
+        name = data.get("name", "world")
+        try:
+            return cls._from_dict(data)
+        except InvalidWorldError as exc:
+            if str(exc).startswith("world "):
+                raise
+            raise InvalidWorldError(f"world {name!r}: {exc}", where=exc.where) from None
+
+    @classmethod
+    def _from_dict(cls, data: dict[str, Any]) -> World:
         allowed = {"name", "boundary", "holes", "start", "goal", "obstacles"}
         unknown = sorted(set(data) - allowed)
         if unknown:
-            raise InvalidWorldError(f"unknown keys {unknown}; expected some of {sorted(allowed)}")
+            raise InvalidWorldError(
+                f"unknown keys {unknown}; expected some of {sorted(allowed)}", where=(unknown[0],)
+            )
         if "boundary" not in data:
             raise InvalidWorldError("missing key 'boundary' (a list of [x, y] vertices)")
         holes = data.get("holes", [])
         if not isinstance(holes, list):
-            raise InvalidWorldError(f"holes must be a list of polygons; got {_json_type(holes)}")
+            raise InvalidWorldError(
+                f"holes must be a list of polygons; got {_json_type(holes)}", where=("holes",)
+            )
         obstacles = data.get("obstacles")
+        with _at("obstacles"):
+            spec = ObstacleSpec.from_dict(obstacles) if obstacles is not None else None
         return cls(
             boundary=_coords(data["boundary"], "boundary"),
-            holes=tuple(_coords(h, f"hole {k}") for k, h in enumerate(holes)),
+            holes=tuple(_coords(h, "holes", k) for k, h in enumerate(holes)),
             name=data.get("name", "world"),
             start=_coords(data["start"], "start") if data.get("start") is not None else None,
             goal=_coords(data["goal"], "goal") if data.get("goal") is not None else None,
-            obstacles=ObstacleSpec.from_dict(obstacles) if obstacles is not None else None,
+            obstacles=spec,
         )
 
 
-def _simple_ring(coords: Any, name: str, *, ccw: bool) -> FloatArray:
+def _simple_ring(coords: Any, name: str) -> FloatArray:
+    """The ring as given (vertex numbers in messages are the user's), checked simple."""
     ring = as_ring(coords, name)
+    v = ring - ring[0]
+    d = v[int(np.argmax(np.hypot(v[:, 0], v[:, 1])))]
+    if np.all(np.abs(v[:, 0] * d[1] - v[:, 1] * d[0]) <= 1e-12 * float(d @ d)):
+        raise InvalidWorldError(f"{name} must enclose an area; its vertices are collinear")
     crossings = ring_crossings(ring)
     if crossings:
         i, j, (x, y) = crossings[0]
         raise InvalidWorldError(
             f"{name} must be a simple polygon; edges {i} and {j} cross at ({x:.6g}, {y:.6g})"
         )
-    if abs(signed_area(ring)) <= 1e-12:
-        raise InvalidWorldError(f"{name} must enclose an area; its vertices are collinear")
-    return orient(ring, ccw=ccw)
+    return ring
 
 
 def _outside_message(k: int, hole: FloatArray, outer: Polygon) -> str:
@@ -340,8 +378,10 @@ def _outside_message(k: int, hole: FloatArray, outer: Polygon) -> str:
     )
 
 
-def _coords(value: Any, name: str) -> Any:
+def _coords(value: Any, key: str, index: int | None = None) -> Any:
     """Check the JSON shape of coordinates (numbers, not strings or objects)."""
+    where: tuple[str | int, ...] = (key,) if index is None else (key, index)
+    name = key if index is None else f"hole {index}"
 
     def numeric(v: Any) -> bool:
         if isinstance(v, list):
@@ -349,7 +389,9 @@ def _coords(value: Any, name: str) -> Any:
         return isinstance(v, int | float) and not isinstance(v, bool)
 
     if not isinstance(value, list) or not numeric(value):
-        raise InvalidWorldError(f"{name} must be a list of numbers; got {_json_type(value)}")
+        raise InvalidWorldError(
+            f"{name} must be a list of numbers; got {_json_type(value)}", where=where
+        )
     return value
 
 

@@ -1,0 +1,95 @@
+from __future__ import annotations
+
+import gymnasium
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+import copi  # noqa: F401 - registers the environments
+from copi.errors import InvalidArgumentError
+from copi.world import NavigationEnv
+from tests.common import U_TRAP
+
+IDS = sorted(i for i in gymnasium.registry if i.startswith("copi/"))
+
+
+def test_ids_are_registered() -> None:
+    assert "copi/Navigation-v0" in IDS and len(IDS) >= 2
+
+
+@pytest.mark.parametrize("env_id", IDS)
+@pytest.mark.parametrize("render_mode", [None, "rgb_array"])
+def test_check_env_passes_without_warnings(env_id: str, render_mode: str | None) -> None:
+    # warnings are errors in the test suite (pyproject), so any checker warning fails here
+    env = gymnasium.make(env_id, render_mode=render_mode)
+    check_env(env.unwrapped)
+    env.close()
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_same_seed_rollouts_are_identical(env_id: str) -> None:
+    def rollout() -> list[tuple]:
+        env = gymnasium.make(env_id)
+        env.action_space.seed(3)
+        obs, _ = env.reset(seed=42)
+        out = [(obs.tobytes(),)]
+        for _ in range(200):
+            obs, r, term, trunc, _ = env.step(env.action_space.sample())
+            out.append((obs.tobytes(), r, term, trunc))
+            if term or trunc:
+                obs, _ = env.reset()
+                out.append((obs.tobytes(),))
+        return out
+
+    assert rollout() == rollout()
+
+
+def test_reset_with_a_given_world_and_reward() -> None:
+    env = NavigationEnv(obstacles=0)
+    obs, info = env.reset(seed=0, options={"world": U_TRAP})
+    assert obs.shape == (34,) and obs.dtype == np.float32
+    assert obs[32:].tolist() == [0.0, 13.0]
+    assert info["world"] == "u-trap"
+    obs, reward, term, trunc, info = env.step(np.array([0, 1], dtype=np.float32))
+    assert reward == pytest.approx(1.0 - 0.01)
+    assert not term and not trunc and not info["contact"]
+    obs2, _ = env.reset(seed=0, options={"world": U_TRAP.to_dict()})
+    assert obs2[32:].tolist() == [0.0, 13.0]
+
+
+def test_collision_terminates_or_not() -> None:
+    world = U_TRAP.replace(start=[3, 3], goal=[37, 27])
+    for terminate in (True, False):
+        env = NavigationEnv(obstacles=1, terminate_on_collision=terminate)
+        env.reset(seed=0, options={"world": world})
+        assert env.sim is not None
+        env.sim.centers[0] = [4.0, 3.0]  # put the obstacle right in the agent's way
+        env.sim.speed = 0.0
+        _, reward, term, _, info = env.step(np.array([1, 0], dtype=np.float32))
+        assert info["contact"] and term == terminate and reward < -9
+
+
+def test_truncation_at_the_step_limit() -> None:
+    env = NavigationEnv(obstacles=0, max_steps=5)
+    env.reset(seed=0)
+    flags = [env.step(np.zeros(2, dtype=np.float32))[3] for _ in range(5)]
+    assert flags == [False] * 4 + [True]
+
+
+def test_bad_construction_and_options() -> None:
+    with pytest.raises(InvalidArgumentError, match="render_mode must be one of"):
+        NavigationEnv(render_mode="human")
+    env = NavigationEnv()
+    with pytest.raises(InvalidArgumentError, match="unknown reset options"):
+        env.reset(options={"wrld": U_TRAP})
+    with pytest.raises(gymnasium.error.ResetNeeded):
+        NavigationEnv().step(np.zeros(2, dtype=np.float32))
+
+
+def test_render_returns_an_image() -> None:
+    env = NavigationEnv(render_mode="rgb_array")
+    env.reset(seed=1)
+    env.step(env.action_space.sample())
+    img = env.render()
+    assert img is not None and img.shape == (400, 400, 3) and img.dtype == np.uint8
+    assert len(np.unique(img.reshape(-1, 3), axis=0)) > 5

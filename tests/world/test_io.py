@@ -1,0 +1,113 @@
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from copi.errors import WorldFileError
+from copi.world import ObstacleSpec, load_worlds, random_world, sample_start_goal, save_worlds
+from tests.common import NAMED, U_TRAP
+
+
+@settings(
+    max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(
+    seeds=st.lists(st.integers(0, 2**32 - 1), min_size=1, max_size=4),
+    with_task=st.booleans(),
+    spec=st.none()
+    | st.builds(
+        ObstacleSpec, count=st.tuples(st.just(3), st.integers(3, 9)), radius=st.just((0.5, 0.9))
+    ),
+)
+def test_round_trip(tmp_path: Path, seeds: list[int], with_task: bool, spec) -> None:
+    worlds = []
+    for s in seeds:
+        w = random_world(s).replace(obstacles=spec)
+        if with_task:
+            start, goal = sample_start_goal(w, s)
+            w = w.replace(start=start, goal=goal)
+        worlds.append(w)
+    worlds += list(NAMED.values())
+    save_worlds(worlds, tmp_path / "w.json")
+    assert load_worlds(tmp_path / "w.json") == worlds
+
+
+def test_the_design_example_loads(tmp_path: Path) -> None:
+    text = """{"name": "u-trap",
+ "boundary": [[0, 0], [40, 0], [40, 30], [0, 30]],
+ "holes": [[[10, 5], [30, 5], [30, 25], [28, 25], [28, 7], [12, 7], [12, 25], [10, 25]]],
+ "start": [20, 15], "goal": [20, 28],
+ "obstacles": {"count": 12, "radius": 0.75, "speed": 0.6}}"""
+    (tmp_path / "u.json").write_text(text)
+    (w,) = load_worlds(tmp_path / "u.json")
+    assert w == U_TRAP.replace(obstacles=ObstacleSpec(count=(12, 12), radius=(0.75, 0.75)))
+
+
+def _write(tmp_path: Path, text: str) -> Path:
+    p = tmp_path / "bad.json"
+    p.write_text(text)
+    return p
+
+
+@pytest.mark.parametrize(
+    ("text", "expected"),
+    [
+        ('[{"boundary": [[0,0],[1,0]', ":1:27: not valid JSON (Expecting ',' delimiter)"),
+        ("", ":1:1: not valid JSON (Expecting value)"),
+        ("[]", ":1:1: expected a world object or a non-empty list"),
+        ('"hello"', ":1:1: a world must be a JSON object; got a string"),
+        (
+            '[\n {"boundary": [[0,0],[4,0],[4,4],[0,4]]},\n {"name": "x",\n  "boundary": [[0,0],[4,4],[4,0],[0,4]]}\n]',
+            ":4:15: world 'x': boundary must be a simple polygon; edges 0 and 2 cross at (2, 2)",
+        ),
+        (
+            '{"boundary": [[0,0],[9,0],[9,9],[0,9]],\n "holes": [\n  [[1,1],[2,1],[2,2]],\n  [[5,5],[12,5],[12,6]]]}',
+            ":4:3: world 'world': hole 1 must lie strictly inside the boundary; its vertex 1 (12, 5) does not",
+        ),
+        (
+            '{"boundary": [[0,0],[9,0],[9,9]], "colour": 3}',
+            ":1:45: world 'world': unknown keys ['colour']",
+        ),
+        (
+            '{"boundary": "square"}',
+            ":1:14: world 'world': boundary must be a list of numbers; got a string",
+        ),
+        (
+            '{"boundary": [[0,0],[9,0],[9,9]],\n "obstacles": {"count": -1}}',
+            ":2:15: world 'world': obstacles.count must be finite with 0 <= low <= high",
+        ),
+        ('{"holes": []}', ":1:1: world 'world': missing key 'boundary'"),
+    ],
+)
+def test_bad_files_are_refused_with_a_line(tmp_path: Path, text: str, expected: str) -> None:
+    p = _write(tmp_path, text)
+    with pytest.raises(WorldFileError) as err:
+        load_worlds(p)
+    assert str(err.value).startswith(f"{p}{expected}"), str(err.value)
+
+
+def test_unreadable_files(tmp_path: Path) -> None:
+    with pytest.raises(WorldFileError, match="no such world file"):
+        load_worlds(tmp_path / "missing.json")
+    with pytest.raises(WorldFileError, match="is a directory"):
+        load_worlds(tmp_path)
+    (tmp_path / "bin.json").write_bytes(b"\x89PNG\r\n\x1a\n\xff\xfe")
+    with pytest.raises(WorldFileError, match="not a text file"):
+        load_worlds(tmp_path / "bin.json")
+
+
+def test_failed_save_leaves_the_old_file(tmp_path: Path) -> None:
+    p = tmp_path / "w.json"
+    save_worlds(U_TRAP, p)
+    before = p.read_bytes()
+    with pytest.raises(WorldFileError, match="save_worlds takes World objects"):
+        save_worlds([U_TRAP, "not a world"], p)  # type: ignore[list-item]
+    assert p.read_bytes() == before
+    assert sorted(x.name for x in tmp_path.iterdir()) == ["w.json"]
+    assert json.loads(before)[0]["name"] == "u-trap"
+    assert np.allclose(load_worlds(p)[0].boundary, U_TRAP.boundary)

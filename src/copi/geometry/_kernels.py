@@ -88,6 +88,38 @@ def scan(origins, cos, sin, segs, centers, radii, max_range, out):  # type: igno
 
 
 @njit(cache=True, inline="always")
+def _finite(a):  # type: ignore[no-untyped-def]
+    for v in a.flat:
+        if not math.isfinite(v):
+            return False
+    return True
+
+
+@njit(cache=True)
+def scan_checked(origins, cos, sin, segs, centers, radii, max_range, out):  # type: ignore[no-untyped-def]
+    """:func:`scan` after checking, in the same compiled call, that every input is finite
+    and every radius >= 0; returns False (and computes nothing) otherwise. Checking here
+    costs nanoseconds where numpy's isfinite costs a microsecond per array."""
+    if not (
+        _finite(origins)
+        and _finite(cos)
+        and _finite(sin)
+        and _finite(segs)
+        and _finite(centers)
+        and _finite(radii)
+        and math.isfinite(max_range)
+    ):
+        return False
+    for v in radii:
+        if v < 0.0:
+            return False
+    if not max_range > 0.0:
+        return False
+    scan(origins, cos, sin, segs, centers, radii, max_range, out)
+    return True
+
+
+@njit(cache=True, inline="always")
 def _sweep_one(ox, oy, dx, dy, segs, r):  # type: ignore[no-untyped-def]
     """Distance a disc of radius r at o can travel along the unit vector d before it
     touches a segment, or inf. Only entering contacts count, so a disc resting against a

@@ -64,11 +64,46 @@ def cast_rays(
     >>> cast_rays([1.0, 1.0], [0.0], square, [[2.5, 1.0]], 0.5).tolist()
     [1.0]
     """
+    pts = np.asarray(origins, dtype=np.float64)
+    single = pts.ndim == 1
+    ang = np.asarray(angles, dtype=np.float64)
+    segs = np.asarray(segments, dtype=np.float64)
+    if centers is None and radii is None:
+        c, r = _NO_CENTERS, _NO_RADII
+    else:
+        c = np.asarray(centers, dtype=np.float64)
+        r = np.asarray(radii, dtype=np.float64)
+        if r.ndim == 0 and c.ndim == 2:
+            r = np.full(c.shape[0], float(r))
+    shapes_ok = (
+        pts.shape[-1:] == (2,)
+        and pts.ndim in (1, 2)
+        and ang.ndim == 1
+        and segs.ndim == 2
+        and segs.shape[1] == 4
+        and c.ndim == 2
+        and c.shape[1] == 2
+        and r.shape == (c.shape[0],)
+        and isinstance(max_range, int | float)
+    )
+    if shapes_ok:
+        # Fast path: shapes checked above, values checked inside the compiled call.
+        batch = pts[None] if single else pts
+        out = np.empty((batch.shape[0], ang.shape[0]))
+        if _kernels.scan_checked(
+            batch, np.cos(ang), np.sin(ang), segs, c, r, float(max_range), out
+        ):
+            return out[0] if single else out
+    # Something is off: validate one argument at a time to say exactly what.
     pts, single = as_points(origins, "origins")
     ang = as_vector(angles, "angles")
     segs = as_segments(segments)
     c, r = as_discs(centers, radii)
-    rng = positive(max_range, "max_range")
+    mr = positive(max_range, "max_range")
     out = np.empty((pts.shape[0], ang.shape[0]))
-    _kernels.scan(pts, np.cos(ang), np.sin(ang), segs, c, r, rng, out)
+    _kernels.scan(pts, np.cos(ang), np.sin(ang), segs, c, r, mr, out)
     return out[0] if single else out
+
+
+_NO_CENTERS = np.zeros((0, 2))
+_NO_RADII = np.zeros(0)

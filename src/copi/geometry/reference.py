@@ -36,19 +36,18 @@ def cast_rays_shapely(
     rays = shapely.linestrings(
         np.stack([np.broadcast_to(o, ends.shape), ends], axis=1)  # (n, 2, 2)
     )
-    segs = np.asarray(segments, dtype=float).reshape(-1, 2, 2)
-    parts = list(shapely.linestrings(segs))
+    origin_pt = shapely.points(o)
+    walls = shapely.multilinestrings(np.asarray(segments, dtype=float).reshape(-1, 2, 2))
+    best = shapely.distance(origin_pt, shapely.intersection(rays, walls))  # NaN: no hit
     if centers is not None and len(centers):
         c = np.asarray(centers, dtype=float).reshape(-1, 2)
         r = np.broadcast_to(np.asarray(radii, dtype=float), (len(c),))
         discs = shapely.buffer(shapely.points(c), r, quad_segs=quad_segs)
-        if shapely.contains_xy(shapely.union_all(discs), o[0], o[1]):
+        if shapely.contains_xy(discs, o[0], o[1]).any():
             return np.zeros(len(ang))
-        parts += list(shapely.boundary(discs))
-    walls = shapely.union_all(parts)
-    hits = shapely.intersection(rays, walls)
-    d = shapely.distance(shapely.points(o), hits)
-    return np.where(np.isnan(d), max_range, np.minimum(d, max_range))
+        rims = shapely.multilinestrings(shapely.get_exterior_ring(discs))
+        best = np.fmin(best, shapely.distance(origin_pt, shapely.intersection(rays, rims)))
+    return np.where(np.isnan(best), max_range, np.minimum(best, max_range))
 
 
 def cast_rays_numpy(

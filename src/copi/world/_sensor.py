@@ -8,9 +8,8 @@ from typing import Any
 import numpy as np
 
 from copi.errors import InvalidArgumentError
-from copi.geometry import ring_angles
-from copi.geometry._arrays import FloatArray, as_discs, as_points
-from copi.geometry._kernels import scan as _scan_kernel
+from copi.geometry import cast_rays, ring_angles
+from copi.geometry._arrays import FloatArray
 from copi.world._world import World
 
 __all__ = ["RangeSensor"]
@@ -60,8 +59,6 @@ class RangeSensor:
 
         ``centers``/``radii`` are the moving obstacles' discs, shared by all positions.
         """
-        pts, single = as_points(positions, "positions")
-        c, r = as_discs(centers, radii)
-        out = np.empty((pts.shape[0], self.n_rays))
-        _scan_kernel(pts, self.cos, self.sin, world.segments, c, r, self.max_range, out)
-        return out[0] if single else out
+        return cast_rays(
+            positions, self.angles, world.segments, centers, radii, max_range=self.max_range
+        )

@@ -1,0 +1,21 @@
+"""Run every benchmark (``make bench``); exits non-zero if a goal was missed."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from benchmarks import bench_world  # noqa: E402
+
+
+def main() -> int:
+    results = {"world": bench_world.main()}
+    missed = [name for name, ok in results.items() if not ok]
+    print("all goals met" if not missed else f"goals missed in: {', '.join(missed)}")
+    return 1 if missed else 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

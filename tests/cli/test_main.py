@@ -1,0 +1,89 @@
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from copi.cli import main
+from copi.world import load_worlds
+
+
+def run(args: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, str]:
+    with pytest.raises(SystemExit) as exit_:
+        main(args)
+    captured = capsys.readouterr()
+    return int(exit_.value.code or 0), captured.out, captured.err
+
+
+def test_sample_then_show(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    worlds = tmp_path / "sub" / "worlds.json"
+    code, out, _ = run(["world", "sample", "--seed", "3", "-n", "2", "-o", str(worlds)], capsys)
+    assert code == 0 and "000-" in out
+    loaded = load_worlds(worlds)
+    assert len(loaded) == 2
+    code, out, _ = run(["world", "sample", "--seed", "3", "-n", "2", "-o", str(worlds)], capsys)
+    assert load_worlds(worlds) == loaded  # same seed, same worlds
+    pics = tmp_path / "pics"
+    code, out, _ = run(
+        ["world", "show", str(worlds), "-o", str(pics), "--steps", "20", "--gif"], capsys
+    )
+    assert code == 0
+    names = sorted(p.name for p in pics.iterdir())
+    stems = [w.name for w in loaded]
+    assert names == sorted(
+        [f"{s}.png" for s in stems] + [f"{s}.gif" for s in stems] + ["worlds.png"]
+    )
+    assert (pics / "worlds.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert (pics / f"{stems[0]}.gif").read_bytes()[:6] == b"GIF89a"
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["world", "sample", "-n", "0", "-o", "x.json"], "Invalid value for '-n'"),
+        (["world", "sample", "--seed", "-1", "-o", "x.json"], "Invalid value for '--seed'"),
+        (["world", "sample"], "Missing option '-o'"),
+        (["world", "show", "nope.json", "-o", "d"], "nope.json: no such world file"),
+        (["world", "frobnicate"], "No such command 'frobnicate'"),
+    ],
+)
+def test_bad_arguments_exit_2_with_one_message(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+    args,
+    message,
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    code, _, err = run(args, capsys)
+    assert code == 2
+    assert message in err
+    assert "Traceback" not in err
+
+
+def test_bad_world_file_exits_2_and_names_the_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    bad = tmp_path / "bad.json"
+    bad.write_text('[\n{"boundary": [[0, 0], [4, 4], [4, 0], [0, 4]]}\n]')
+    code, _, err = run(["world", "show", str(bad), "-o", str(tmp_path / "out")], capsys)
+    assert code == 2
+    assert f"{bad}:2:14: world 'world': boundary must be a simple polygon" in err.replace("\n", "")
+    assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
+
+
+def test_the_installed_command_runs_without_traceback(tmp_path: Path) -> None:
+    bad = tmp_path / "w.json"
+    bad.write_text(json.dumps({"boundary": [[0, 0], [1, float("nan")], [2, 0]]}))
+    proc = subprocess.run(
+        [sys.executable, "-m", "copi.cli.main", "world", "show", str(bad), "-o", str(tmp_path)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert proc.returncode == 2, proc.stderr
+    assert "Traceback" not in proc.stderr
+    assert "boundary must be" in proc.stderr

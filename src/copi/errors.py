@@ -10,7 +10,9 @@ from __future__ import annotations
 __all__ = [
     "CopiError",
     "InvalidArgumentError",
+    "InvalidQueryError",
     "InvalidWorldError",
+    "MapFileError",
     "WorldFileError",
 ]
 
@@ -41,3 +43,11 @@ class WorldFileError(CopiError, ValueError):
 
     The message starts with ``path:line:column:`` when the place is known.
     """
+
+
+class InvalidQueryError(CopiError, ValueError):
+    """A planning query is impossible as asked: its start or goal is not in free space."""
+
+
+class MapFileError(CopiError, ValueError):
+    """A Moving AI ``.map`` or ``.scen`` file cannot be read."""

@@ -67,7 +67,7 @@ def ring_crossings(ring: FloatArray) -> list[tuple[int, int, tuple[float, float]
     their shared vertex; each as ``(i, j, point)`` with i < j.
 
     A neighbouring pair that folds back onto itself (a zero-width spike) is reported too.
-    Vectorised over all pairs: O(n^2) memory, fine for the few hundred edges of a world.
+    Vectorised over pairs of edges, in blocks of rows so that memory stays bounded.
 
     Examples
     --------
@@ -76,7 +76,19 @@ def ring_crossings(ring: FloatArray) -> list[tuple[int, int, tuple[float, float]
     """
     segs = ring_segments(np.asarray(ring, dtype=np.float64))
     n = segs.shape[0]
-    i, j = np.triu_indices(n, k=1)
+    out: list[tuple[int, int, tuple[float, float]]] = []
+    rows = max(1, 2_000_000 // max(n, 1))
+    for first in range(0, n, rows):
+        out += _crossings_block(segs, first, min(n, first + rows))
+    return out
+
+
+def _crossings_block(
+    segs: FloatArray, first: int, last: int
+) -> list[tuple[int, int, tuple[float, float]]]:
+    n = segs.shape[0]
+    i, j = np.nonzero(np.arange(n)[None, :] > np.arange(first, last)[:, None])
+    i = i + first
     p, e = segs[i, :2], segs[i, 2:] - segs[i, :2]
     q, f = segs[j, :2], segs[j, 2:] - segs[j, :2]
     w = q - p

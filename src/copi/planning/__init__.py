@@ -1,0 +1,21 @@
+"""Optimal reference paths on static snapshots, and grid search.
+
+The paper judges its online agent against "an optimal A* shortest path, run on stationary
+snapshots of the environment" (§IV). :func:`shortest_path` gives it in the continuous
+plane for a disc agent (visibility graph of the configuration space); :func:`grid_astar`
+searches occupancy grids with the Moving AI conventions, and :mod:`movingai` readers turn
+their benchmark maps into worlds.
+"""
+
+from __future__ import annotations
+
+from copi.planning._cspace import configuration_space, length_error_bound, shortest_path
+from copi.planning._visibility import Plan, VisibilityGraph
+
+__all__ = [
+    "Plan",
+    "VisibilityGraph",
+    "configuration_space",
+    "length_error_bound",
+    "shortest_path",
+]

@@ -1,0 +1,189 @@
+"""Moving AI grid benchmarks (Sturtevant 2012): ``.map`` and ``.scen`` files, and maps
+as copi worlds.
+
+``.map``: ``type octile``, ``height H``, ``width W``, ``map``, then H rows of W characters;
+cell (x, y) is column x, row y, (0, 0) top-left. Passable: ``.`` and ``G`` (also ``S``
+and ``W``, swamp and water, are treated as blocked, as in the octile benchmarks); blocked:
+``@``, ``O``, ``T``. ``.scen``: ``version 1`` then rows ``bucket map width height sx sy
+gx gy optimal_length`` (tabs or spaces).
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import shapely
+from numpy.typing import NDArray
+from shapely.geometry import MultiPolygon, Polygon, box
+
+from copi.errors import InvalidWorldError, MapFileError
+from copi.world import World
+
+__all__ = [
+    "GridMap",
+    "Scenario",
+    "cell_center",
+    "free_geometry",
+    "map_world",
+    "read_map",
+    "read_scenarios",
+]
+
+PASSABLE = frozenset(".G")
+BLOCKED = frozenset("@OTSW")
+
+
+@dataclass(frozen=True, eq=False)
+class GridMap:
+    """A Moving AI map: ``free[y, x]`` is True for a passable cell."""
+
+    name: str
+    free: NDArray[np.bool_]
+
+    @property
+    def height(self) -> int:
+        return int(self.free.shape[0])
+
+    @property
+    def width(self) -> int:
+        return int(self.free.shape[1])
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """One line of a ``.scen`` file."""
+
+    bucket: int
+    map_name: str
+    width: int
+    height: int
+    start: tuple[int, int]
+    goal: tuple[int, int]
+    optimal_length: float
+    line: int
+    """Line number in the file (1-based), for messages."""
+
+
+def read_map(path: str | os.PathLike[str]) -> GridMap:
+    """Read a ``.map`` file; a malformed one raises :class:`MapFileError` with its line."""
+    p = Path(path)
+    try:
+        lines = p.read_text(encoding="ascii").splitlines()
+    except (OSError, UnicodeDecodeError) as exc:
+        raise MapFileError(f"{p}: cannot read a Moving AI map ({exc})") from None
+    header: dict[str, str] = {}
+    i = 0
+    while i < len(lines) and lines[i].strip() != "map":
+        parts = lines[i].split()
+        if len(parts) != 2:
+            raise MapFileError(
+                f"{p}:{i + 1}: expected 'key value' header or 'map'; got {lines[i]!r}"
+            )
+        header[parts[0]] = parts[1]
+        i += 1
+    if i == len(lines):
+        raise MapFileError(f"{p}: no 'map' line; not a Moving AI map")
+    try:
+        h, w = int(header["height"]), int(header["width"])
+    except (KeyError, ValueError):
+        raise MapFileError(
+            f"{p}: header must give integer 'height' and 'width'; got {header}"
+        ) from None
+    rows = lines[i + 1 : i + 1 + h]
+    if len(rows) != h:
+        raise MapFileError(f"{p}: expected {h} map rows; found {len(rows)}")
+    grid = np.zeros((h, w), dtype=bool)
+    for y, row in enumerate(rows):
+        if len(row) < w:
+            raise MapFileError(f"{p}:{i + 2 + y}: expected {w} cells; found {len(row)}")
+        chars = set(row[:w])
+        unknown = chars - PASSABLE - BLOCKED
+        if unknown:
+            raise MapFileError(f"{p}:{i + 2 + y}: unknown cell characters {sorted(unknown)}")
+        grid[y] = [c in PASSABLE for c in row[:w]]
+    return GridMap(p.name, grid)
+
+
+def read_scenarios(path: str | os.PathLike[str]) -> list[Scenario]:
+    """Read a ``.scen`` file (version 1 or 1.0; tab- or space-separated)."""
+    p = Path(path)
+    try:
+        lines = p.read_text(encoding="ascii").splitlines()
+    except (OSError, UnicodeDecodeError) as exc:
+        raise MapFileError(f"{p}: cannot read a Moving AI scenario file ({exc})") from None
+    if not lines or not lines[0].startswith("version"):
+        raise MapFileError(f"{p}:1: expected 'version 1' first; got {lines[0] if lines else ''!r}")
+    out = []
+    for n, line in enumerate(lines[1:], start=2):
+        if not line.strip():
+            continue
+        f = line.split("\t") if "\t" in line else line.split()
+        if len(f) != 9:
+            raise MapFileError(f"{p}:{n}: expected 9 fields; found {len(f)}")
+        try:
+            out.append(
+                Scenario(
+                    bucket=int(f[0]),
+                    map_name=f[1],
+                    width=int(f[2]),
+                    height=int(f[3]),
+                    start=(int(f[4]), int(f[5])),
+                    goal=(int(f[6]), int(f[7])),
+                    optimal_length=float(f[8]),
+                    line=n,
+                )
+            )
+        except ValueError as exc:
+            raise MapFileError(f"{p}:{n}: {exc}") from None
+    return out
+
+
+def cell_center(grid: GridMap, cell: tuple[int, int]) -> NDArray[np.float64]:
+    """World coordinates of a cell's centre. Cell (x, y) is the unit square
+    [x, x + 1] x [H - 1 - y, H - y]: y points up in worlds, down in map files."""
+    x, y = cell
+    return np.array([x + 0.5, grid.height - y - 0.5])
+
+
+def free_geometry(grid: GridMap) -> Polygon | MultiPolygon:
+    """The closed free space of a map in world coordinates (blocked cells are closed
+    unit squares; see :func:`cell_center`)."""
+    h, w = grid.free.shape
+    runs = []
+    for y in range(h):
+        row = ~grid.free[y]
+        if not row.any():
+            continue
+        edges = np.flatnonzero(np.diff(np.concatenate([[0], row.astype(np.int8), [0]])))
+        top = h - y
+        runs += [box(a, top - 1, b, top) for a, b in zip(edges[::2], edges[1::2], strict=True)]
+    region = box(0, 0, w, h)
+    if not runs:
+        return region
+    return shapely.difference(region, shapely.union_all(runs))
+
+
+def map_world(grid: GridMap, *, near: tuple[int, int] | None = None) -> World:
+    """A map's free space as a :class:`~copi.world.World`: the connected region holding
+    cell ``near`` (the largest region by default), its walls and holes."""
+    geom = free_geometry(grid)
+    parts = list(geom.geoms) if isinstance(geom, MultiPolygon) else [geom]
+    parts = [g for g in parts if isinstance(g, Polygon) and not g.is_empty]
+    if not parts:
+        raise InvalidWorldError(f"map {grid.name}: no free cell")
+    if near is None:
+        region = max(parts, key=lambda g: g.area)
+    else:
+        c = cell_center(grid, near)
+        inside = [g for g in parts if shapely.intersects_xy(g, c[0], c[1])]
+        if not inside:
+            raise InvalidWorldError(f"map {grid.name}: cell {near} is not free")
+        region = inside[0]
+    return World(
+        np.asarray(region.exterior.coords)[:-1],
+        tuple(np.asarray(r.coords, dtype=np.float64)[:-1] for r in region.interiors),
+        name=Path(grid.name).stem,
+    )

@@ -36,7 +36,11 @@ pytest: install
 
 test: lint typecheck pytest
 
+# The reference planner is compared with extremitypathfinder when it can be installed;
+# the long data checks (every Moving AI scenario line) run here, not in `make test`.
 bench: install
+	-$(BIN)/python -m pip install --quiet extremitypathfinder || echo "extremitypathfinder unavailable: no ratio"
+	$(BIN)/pytest -m slow
 	$(BIN)/python benchmarks/run.py
 
 clean:

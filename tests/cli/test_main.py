@@ -87,3 +87,44 @@ def test_the_installed_command_runs_without_traceback(tmp_path: Path) -> None:
     assert proc.returncode == 2, proc.stderr
     assert "Traceback" not in proc.stderr
     assert "boundary must be" in proc.stderr
+
+
+def test_import_movingai_then_plan(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    data = Path(__file__).resolve().parents[3] / "shared" / "data" / "movingai" / "mapf"
+    if not data.is_dir():
+        pytest.skip("shared/data is not beside the project")
+    world_file = tmp_path / "room.json"
+    code, out, _ = run(
+        ["world", "import-movingai", str(data / "room-32-32-4.map"), "-o", str(world_file)], capsys
+    )
+    assert code == 0 and "27 holes" in out
+    png = tmp_path / "plan.png"
+    code, out, _ = run(
+        [
+            "plan",
+            str(world_file),
+            "--start",
+            "3.5",
+            "3.5",
+            "--goal",
+            "28.5",
+            "29.5",
+            "-o",
+            str(png),
+        ],
+        capsys,
+    )
+    assert code == 0 and out.startswith("length ")
+    length = float(out.split()[1])
+    assert 25.0 * 2**0.5 <= length <= 43.0
+    assert png.read_bytes()[:4] == b"\x89PNG"
+    code, _, err = run(
+        ["plan", str(world_file), "--start", "0.5", "31.5", "--goal", "1", "1"], capsys
+    )
+    assert code == 2 and "start (0.5, 31.5) must lie in the free space" in err
+    code, _, err = run(["plan", str(world_file), "--start", "3.5", "3.5"], capsys)
+    assert code == 2 and "has no goal; give --start and --goal" in err
+    code, _, err = run(
+        ["world", "import-movingai", str(world_file), "-o", str(tmp_path / "x.json")], capsys
+    )
+    assert code == 2 and "expected 'key value' header" in err and "Traceback" not in err

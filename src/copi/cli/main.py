@@ -29,8 +29,8 @@ app = typer.Typer(
 world_app = typer.Typer(help="Sample, show and import worlds.", no_args_is_help=True)
 app.add_typer(world_app, name="world")
 
-console = Console(stderr=True)
-out = Console()
+console = Console(stderr=True, soft_wrap=True)
+out = Console(soft_wrap=True)
 
 
 def progress() -> Progress:
@@ -112,6 +112,79 @@ def world_show(
         written.append(save_overview_png(sims, output / "worlds.png"))
     for path in written:
         out.print(str(path))
+
+
+@world_app.command("import-movingai")
+def world_import_movingai(
+    map_file: Annotated[Path, typer.Argument(help="Moving AI .map file.")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="World file to write (JSON).")],
+    near: Annotated[
+        tuple[int, int] | None,
+        typer.Option(
+            "--near", help="Keep the free region holding this cell (x y); default: the largest."
+        ),
+    ] = None,
+) -> None:
+    """Turn a Moving AI grid map into a world: blocked cells become walls and holes."""
+    from copi.planning.movingai import map_world, read_map
+    from copi.world import save_worlds
+
+    grid = read_map(map_file)
+    world = map_world(grid, near=near)
+    output.parent.mkdir(parents=True, exist_ok=True)
+    save_worlds([world], output)
+    out.print(
+        f"{output}: world {world.name!r}, {grid.width} x {grid.height} cells, "
+        f"{len(world.boundary)} boundary vertices, {len(world.holes)} holes, "
+        f"free area {world.area:.0f}"
+    )
+
+
+@app.command("plan")
+def plan_command(
+    world_file: Annotated[Path, typer.Argument(help="World file (JSON).")],
+    start: Annotated[
+        tuple[float, float] | None,
+        typer.Option("--start", help="Start x y (default: the world's)."),
+    ] = None,
+    goal: Annotated[
+        tuple[float, float] | None, typer.Option("--goal", help="Goal x y (default: the world's).")
+    ] = None,
+    radius: Annotated[float, typer.Option("--radius", min=0.0, help="Agent radius.")] = 0.0,
+    index: Annotated[int, typer.Option("--index", min=0, help="Which world of the file.")] = 0,
+    output: Annotated[
+        Path | None, typer.Option("-o", "--output", help="Draw the path to this PNG.")
+    ] = None,
+) -> None:
+    """Print the shortest path between two points of a world (and draw it)."""
+    from copi.errors import InvalidArgumentError
+    from copi.planning import shortest_path
+    from copi.world import load_worlds
+
+    worlds = load_worlds(world_file)
+    if index >= len(worlds):
+        raise InvalidArgumentError(f"--index {index}: {world_file} holds {len(worlds)} world(s)")
+    world = worlds[index]
+    s = np.array(start) if start is not None else world.start
+    g = np.array(goal) if goal is not None else world.goal
+    if s is None or g is None:
+        raise InvalidArgumentError(
+            f"world {world.name!r} has no {'start' if s is None else 'goal'}; give --start and --goal"
+        )
+    plan = shortest_path(world, s, g, radius=radius)
+    if not plan.found:
+        out.print(f"no path from {tuple(s)} to {tuple(g)} in {world.name!r} for radius {radius:g}")
+        raise typer.Exit(1)
+    assert plan.path is not None
+    out.print(f"length {plan.length:.6f} ({len(plan.path) - 1} segments)")
+    for x, y in plan.path:
+        out.print(f"  {x:.6g} {y:.6g}")
+    if output is not None:
+        from copi.experiments.figures import save_plan_png
+
+        output.parent.mkdir(parents=True, exist_ok=True)
+        save_plan_png(world, plan.path, output, title=f"{world.name}: length {plan.length:.3f}")
+        out.print(str(output))
 
 
 def main(argv: list[str] | None = None) -> None:

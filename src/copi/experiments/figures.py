@@ -6,12 +6,13 @@ import math
 import os
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from copi.world import Simulator, draw_simulator
+from copi.world import Simulator, World, draw_simulator, draw_world
 
-__all__ = ["save_episode_gif", "save_episode_png", "save_overview_png"]
+__all__ = ["save_episode_gif", "save_episode_png", "save_overview_png", "save_plan_png"]
 
 
 def _figure(width: float, height: float, dpi: int = 110):  # type: ignore[no-untyped-def]
@@ -37,6 +38,28 @@ def save_episode_png(sim: Simulator, path: str | os.PathLike[str]) -> Path:
     out = Path(path)
     fig.savefig(out)
     return out
+
+
+def save_plan_png(
+    world: World, path: Any, out: str | os.PathLike[str], *, title: str | None = None
+) -> Path:
+    """A world with a planned path (red) from its start (ring) to its goal (star)."""
+    pts = np.asarray(path, dtype=float)
+    w, h = _aspect(world)
+    fig = _figure(w, h)
+    ax = fig.add_subplot()
+    draw_world(ax, world, path=pts, start=pts[0], goal=pts[-1], agent_radius=0.0, title=title)
+    ax.plot(pts[:, 0], pts[:, 1], ".", color="#d62728", ms=4, zorder=6)
+    fig.tight_layout()
+    target = Path(out)
+    fig.savefig(target)
+    return target
+
+
+def _aspect(world: World) -> tuple[float, float]:
+    xmin, ymin, xmax, ymax = world.bounds
+    ratio = (ymax - ymin) / max(xmax - xmin, 1e-9)
+    return (6.0, max(2.5, min(9.0, 6.0 * ratio)))
 
 
 def save_overview_png(sims: Sequence[Simulator], path: str | os.PathLike[str]) -> Path:
@@ -66,8 +89,6 @@ def save_episode_gif(
     from matplotlib.animation import FuncAnimation, PillowWriter
     from matplotlib.artist import Artist
     from matplotlib.patches import Circle
-
-    from copi.world import draw_world
 
     if len(sim.path) < 2:
         raise ValueError("the simulator recorded no steps; create it with record=True and step it")

@@ -82,7 +82,8 @@ def draw_world(
     if path is not None:
         p = np.asarray(path).reshape(-1, 2)
         ax.plot(p[:, 0], p[:, 1], color=AGENT, lw=1.4, zorder=6)
-        ax.add_patch(Circle(tuple(p[-1]), agent_radius, fc=AGENT, ec="none", zorder=7))
+        if agent_radius > 0:
+            ax.add_patch(Circle(tuple(p[-1]), agent_radius, fc=AGENT, ec="none", zorder=7))
     xmin, ymin, xmax, ymax = world.bounds
     pad = 0.03 * max(xmax - xmin, ymax - ymin)
     ax.set_xlim(xmin - pad, xmax + pad)

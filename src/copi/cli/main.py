@@ -169,7 +169,8 @@ def plan_command(
     g = np.array(goal) if goal is not None else world.goal
     if s is None or g is None:
         raise InvalidArgumentError(
-            f"world {world.name!r} has no {'start' if s is None else 'goal'}; give --start and --goal"
+            f"world {world.name!r} has no {'start' if s is None else 'goal'}; "
+            "give --start and --goal"
         )
     plan = shortest_path(world, s, g, radius=radius)
     if not plan.found:

@@ -91,7 +91,7 @@ def _check_grid(scen: Path, sample: int | None) -> int:
         assert abs(plan.length - s.optimal_length) <= tol * max(1.0, s.optimal_length), (
             f"{scen.name}:{s.line}: expected {s.optimal_length}, got {plan.length}"
         )
-        if plan.path is not None:
+        if plan.path is not None and len(plan.path) > 1:
             steps = np.abs(np.diff(plan.path, axis=0))
             assert steps.max() <= 1 and grid.free[plan.path[:, 1], plan.path[:, 0]].all()
     return len(lines)

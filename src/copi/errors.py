@@ -8,11 +8,13 @@ line and exit with code 2.
 from __future__ import annotations
 
 __all__ = [
+    "CapabilitiesFormatError",
     "CopiError",
     "InvalidArgumentError",
     "InvalidQueryError",
     "InvalidWorldError",
     "MapFileError",
+    "NotFittedError",
     "WorldFileError",
 ]
 
@@ -51,3 +53,11 @@ class InvalidQueryError(CopiError, ValueError):
 
 class MapFileError(CopiError, ValueError):
     """A Moving AI ``.map`` or ``.scen`` file cannot be read."""
+
+
+class CapabilitiesFormatError(CopiError, ValueError):
+    """A capabilities file is missing, truncated, foreign, inconsistent or too new."""
+
+
+class NotFittedError(CopiError, ValueError):
+    """An estimator or controller was used before it was fitted or configured."""

@@ -1,7 +1,57 @@
-"""Offline, task-independent capability learning (paper §II)."""
+"""Offline, task-independent capability learning (paper §II, Fig. 1).
+
+exploration -> :class:`GrowingNeuralGas` context map -> :func:`skeletonize` into
+landmarks -> symmetry reduction (:class:`SymmetryGroup`, the paper's
+:class:`PermutationAutomaton`) -> local policy templates -> :class:`Capabilities`.
+:func:`learn` runs the whole chain.
+"""
 
 from __future__ import annotations
 
+from copi.learning._capabilities import FORMAT_VERSION, Capabilities
+from copi.learning._explore import Exploration, explore
 from copi.learning._gng import GrowingNeuralGas
+from copi.learning._pipeline import LearnParams, learn
+from copi.learning._policies import (
+    ActionPriors,
+    AStarLearner,
+    PolicyLearner,
+    PolicySet,
+    ValueIterationLearner,
+    compass,
+    local_world,
+)
+from copi.learning._skeleton import Landmarks, skeletonize
+from copi.learning._symmetry import (
+    Operator,
+    PermutationAutomaton,
+    Reduction,
+    SymmetryGroup,
+    reduce_landmarks,
+    ring_operators,
+)
 
-__all__ = ["GrowingNeuralGas"]
+__all__ = [
+    "FORMAT_VERSION",
+    "AStarLearner",
+    "ActionPriors",
+    "Capabilities",
+    "Exploration",
+    "GrowingNeuralGas",
+    "Landmarks",
+    "LearnParams",
+    "Operator",
+    "PermutationAutomaton",
+    "PolicyLearner",
+    "PolicySet",
+    "Reduction",
+    "SymmetryGroup",
+    "ValueIterationLearner",
+    "compass",
+    "explore",
+    "learn",
+    "local_world",
+    "reduce_landmarks",
+    "ring_operators",
+    "skeletonize",
+]

@@ -27,7 +27,24 @@ __all__ = [
 _NAMES = {
     4: ["E", "N", "W", "S"],
     8: ["E", "NE", "N", "NW", "W", "SW", "S", "SE"],
-    16: ["E", "ENE", "NE", "NNE", "N", "NNW", "NW", "WNW", "W", "WSW", "SW", "SSW", "S", "SSE", "SE", "ESE"],
+    16: [
+        "E",
+        "ENE",
+        "NE",
+        "NNE",
+        "N",
+        "NNW",
+        "NW",
+        "WNW",
+        "W",
+        "WSW",
+        "SW",
+        "SSW",
+        "S",
+        "SSE",
+        "SE",
+        "ESE",
+    ],
 }
 
 
@@ -101,8 +118,9 @@ class PolicyLearner(Protocol):
 
     name: str
 
-    def learn(self, templates: NDArray[np.float64], max_range: float, n_directions: int) -> PolicySet:
-        ...
+    def learn(
+        self, templates: NDArray[np.float64], max_range: float, n_directions: int
+    ) -> PolicySet: ...
 
 
 def _exit_target(
@@ -166,7 +184,9 @@ class AStarLearner:
     averages of many readings, so a reading of exactly the maximum is rare.)"""
     name: str = "astar"
 
-    def learn(self, templates: NDArray[np.float64], max_range: float, n_directions: int) -> PolicySet:
+    def learn(
+        self, templates: NDArray[np.float64], max_range: float, n_directions: int
+    ) -> PolicySet:
         names, dirs = compass(n_directions)
         paths: list[list[NDArray[np.float64] | None]] = []
         for ranges in np.asarray(templates, dtype=np.float64):
@@ -208,7 +228,9 @@ class ValueIterationLearner:
     the agent, as :class:`AStarLearner`'s exits."""
     name: str = "value-iteration"
 
-    def learn(self, templates: NDArray[np.float64], max_range: float, n_directions: int) -> PolicySet:
+    def learn(
+        self, templates: NDArray[np.float64], max_range: float, n_directions: int
+    ) -> PolicySet:
         names, dirs = compass(n_directions)
         h = self.resolution
         half = int(math.ceil(max_range / h))
@@ -219,7 +241,9 @@ class ValueIterationLearner:
         for ranges in np.asarray(templates, dtype=np.float64):
             world = local_world(ranges, max_range)
             radius = min(self.agent_radius, 0.9 * float(world.clearance(np.zeros(2))))
-            free = (world.contains(centres) & (world.clearance(centres) >= radius)).reshape(gx.shape)
+            free = (world.contains(centres) & (world.clearance(centres) >= radius)).reshape(
+                gx.shape
+            )
             free[half, half] = True  # the agent's own cell
             angle = np.arctan2(gy, gx)
             dist = np.hypot(gx, gy)

@@ -116,7 +116,9 @@ def _contract(pos: NDArray[np.float64], edges: NDArray[np.int64]):  # type: igno
                     if b not in adj[w]:
                         adj[b].add(w)
                         adj[w].add(b)
-                        heapq.heappush(heap, (float(np.linalg.norm(p[w] - p[b])), min(w, b), max(w, b)))
+                        heapq.heappush(
+                            heap, (float(np.linalg.norm(p[w] - p[b])), min(w, b), max(w, b))
+                        )
             adj[a] = set()
         merges.append((u, v, w))
         col = np.sqrt(((pos - p[w]) ** 2).sum(1))
@@ -282,7 +284,13 @@ def _by_graph_distance(
     ties broken by Euclidean distance to the landmark."""
     n = pos.shape[0]
     if len(edges):
-        a = csr_matrix((np.ones(2 * len(edges)), (np.r_[edges[:, 0], edges[:, 1]], np.r_[edges[:, 1], edges[:, 0]])), shape=(n, n))
+        a = csr_matrix(
+            (
+                np.ones(2 * len(edges)),
+                (np.r_[edges[:, 0], edges[:, 1]], np.r_[edges[:, 1], edges[:, 0]]),
+            ),
+            shape=(n, n),
+        )
     else:
         a = csr_matrix((n, n))
     hops = shortest_path(a, unweighted=True, indices=anchors)  # (L, n), inf if unreachable

@@ -35,8 +35,10 @@ class Operator:
     sensor ring, the plane transformation it stands for)."""
 
     name: str
-    perm: NDArray[np.int64]
-    matrix: NDArray[np.float64] = field(default_factory=lambda: np.eye(2))
+    perm: Any
+    """Index permutation p, (p . s)[i] = s[p[i]]; stored as an int64 array."""
+    matrix: Any = field(default_factory=lambda: np.eye(2))
+    """2 x 2 plane action; stored as a float64 array."""
 
     def __post_init__(self) -> None:
         p = np.asarray(self.perm)
@@ -243,9 +245,7 @@ class PermutationAutomaton:
             nxt.setdefault(u, []).append((v, labels))
         # Depth-first over (position read, state, states visited, labels still possible).
         stack = [
-            (0, s, 1 << s, everything)
-            for s in range(self.n_states)
-            if abs(a[s] - b[0]) <= tol
+            (0, s, 1 << s, everything) for s in range(self.n_states) if abs(a[s] - b[0]) <= tol
         ]
         while stack:
             i, state, visited, labels = stack.pop()

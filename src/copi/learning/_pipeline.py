@@ -1,0 +1,215 @@
+"""The whole offline phase (paper §II, Fig. 1): exploration -> context map -> landmarks ->
+symmetry reduction -> policy templates -> capabilities."""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from copi.errors import InvalidArgumentError
+from copi.learning._capabilities import Capabilities
+from copi.learning._explore import explore
+from copi.learning._gng import GrowingNeuralGas
+from copi.learning._policies import ActionPriors, AStarLearner, ValueIterationLearner, compass
+from copi.learning._skeleton import skeletonize
+from copi.learning._symmetry import SymmetryGroup, reduce_landmarks, ring_operators
+from copi.world import RangeSensor
+
+__all__ = ["LearnParams", "learn"]
+
+
+@dataclass(frozen=True)
+class LearnParams:
+    """Parameters of :func:`learn`; the defaults are the paper's setting (§IV)."""
+
+    worlds: int = 100
+    """Random worlds explored (paper: 100)."""
+    steps: int = 300
+    """Random-walk steps in each world (paper: 300)."""
+    seed: int = 0
+    """World k of the exploration draws from default_rng([seed, k]); the map from seed."""
+    workers: int = 1
+    """Processes exploring worlds in parallel (results do not depend on it)."""
+    n_rays: int = 32
+    """Rays of the ring sensor (paper: 32)."""
+    max_range: float = 10.0
+    """Sensor range, in agent steps."""
+    agent_radius: float = 0.3
+    """Radius of the disc agent, in agent steps."""
+    max_nodes: int | None = None
+    """Cap on the context map's nodes (None: as many as the signals grow, ~600)."""
+    epochs: int = 2
+    """Passes of the GNG over the readings (2 x 30,000 = the paper's ~600 nodes)."""
+    landmarks: int | None = None
+    """Force this many landmarks instead of the H(k) knee (the paper found 9)."""
+    skeleton_method: str = "knee"
+    """How k is chosen on H(k): "knee" or "curvature" (see copi.learning.skeletonize)."""
+    symmetry_tol: float | None = None
+    """RMS difference (agent steps per ray) under which a landmark maps onto a template;
+    None: the context map's own RMS quantisation error per ray, the typical spread of
+    readings around a node."""
+    directions: int = 4
+    """Local policies per template: 4 (E, N, W, S, the paper's), 8 or 16."""
+    learner: str = "astar"
+    """Policy learner: "astar" (the paper's) or "value-iteration"."""
+
+    def __post_init__(self) -> None:
+        for name in ("worlds", "steps", "workers", "n_rays", "epochs"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or int(v) != v or v < 1:
+                raise InvalidArgumentError(f"{name} must be a positive int; got {v!r}")
+        if self.learner not in ("astar", "value-iteration"):
+            raise InvalidArgumentError(
+                f"learner must be 'astar' or 'value-iteration'; got {self.learner!r}"
+            )
+        if self.directions not in (4, 8, 16):
+            raise InvalidArgumentError(f"directions must be 4, 8 or 16; got {self.directions!r}")
+        if self.landmarks is not None and self.landmarks < 1:
+            raise InvalidArgumentError(f"landmarks must be >= 1; got {self.landmarks}")
+        if self.symmetry_tol is not None and not self.symmetry_tol >= 0:
+            raise InvalidArgumentError(f"symmetry_tol must be >= 0; got {self.symmetry_tol}")
+
+
+Progress = Callable[[str, int, int], None]
+"""progress(stage, done, total), called as a stage advances."""
+
+
+def learn(params: LearnParams | None = None, *, progress: Progress | None = None) -> Capabilities:
+    """Run the offline phase and return the capabilities, with per-stage statistics in
+    ``capabilities.stats["stages"]`` (what each stage produced and its seconds)."""
+    p = params or LearnParams()
+    report = progress or (lambda stage, done, total: None)
+    stages: list[dict[str, Any]] = []
+    sensor = RangeSensor(p.n_rays, p.max_range)
+
+    t0 = time.perf_counter()
+    ex = explore(
+        p.worlds,
+        p.steps,
+        seed=p.seed,
+        workers=p.workers,
+        sensor=sensor,
+        agent_radius=p.agent_radius,
+        progress=lambda k: report("explore", k + 1, p.worlds),
+    )
+    stages.append(
+        {"stage": "explore", "samples": ex.n_samples, "seconds": time.perf_counter() - t0}
+    )
+
+    t0 = time.perf_counter()
+    report("context map", 0, 1)
+    gng = GrowingNeuralGas(p.max_nodes, epochs=p.epochs, random_state=p.seed).fit(ex.readings)
+    qe = gng.quantization_error(ex.readings)
+    report("context map", 1, 1)
+    stages.append(
+        {
+            "stage": "context map (GNG)",
+            "nodes": len(gng.nodes_),
+            "edges": len(gng.edges_),
+            "quantization_error": qe,
+            "seconds": time.perf_counter() - t0,
+        }
+    )
+
+    t0 = time.perf_counter()
+    report("skeleton", 0, 1)
+    lm = skeletonize(gng, method=p.skeleton_method, n_landmarks=p.landmarks)
+    report("skeleton", 1, 1)
+    stages.append(
+        {
+            "stage": "skeleton",
+            "landmarks": lm.n_landmarks,
+            "k": lm.k,
+            "seconds": time.perf_counter() - t0,
+        }
+    )
+
+    t0 = time.perf_counter()
+    group = SymmetryGroup.generate(ring_operators(p.n_rays))
+    _check_directions(group, p.directions)
+    tol = p.symmetry_tol if p.symmetry_tol is not None else qe / np.sqrt(p.n_rays)
+    sizes = np.bincount(lm.members, minlength=lm.n_landmarks)
+    red = reduce_landmarks(lm.points, group, tol=tol, order=np.argsort(-sizes, kind="stable"))
+    stages.append(
+        {
+            "stage": "symmetry",
+            "group_elements": len(group),
+            "reduced_landmarks": int(len(red.templates)),
+            "tolerance": float(tol),
+            "seconds": time.perf_counter() - t0,
+        }
+    )
+
+    t0 = time.perf_counter()
+    report("policies", 0, 1)
+    learner = (
+        AStarLearner(agent_radius=p.agent_radius)
+        if p.learner == "astar"
+        else ValueIterationLearner(agent_radius=p.agent_radius)
+    )
+    templates = lm.points[red.templates]
+    policies = learner.learn(templates, p.max_range, p.directions)
+    priors = _priors(gng, lm, red, group, ex, p.directions)
+    report("policies", 1, 1)
+    stages.append(
+        {
+            "stage": "policies",
+            "learner": learner.name,
+            "policies": policies.n_policies,
+            "seconds": time.perf_counter() - t0,
+        }
+    )
+    return Capabilities(
+        nodes=gng.nodes_,
+        edges=gng.edges_,
+        landmarks=lm,
+        group=group,
+        reduction=red,
+        policies=policies,
+        priors=priors,
+        params={k: v for k, v in dataclasses.asdict(p).items()},
+        stats={"stages": _jsonable(stages), "quantization_error": float(qe)},
+    )
+
+
+def _check_directions(group: SymmetryGroup, n: int) -> None:
+    """The compass must be closed under the group's plane actions, so that a policy
+    mapped back through g^-1 is again a compass policy."""
+    _, dirs = compass(n)
+    for m in group.matrices:
+        moved = dirs @ m.T
+        if not np.all(np.abs(moved @ dirs.T).max(1) > 1 - 1e-9):
+            raise InvalidArgumentError(
+                f"{n} directions are not closed under the symmetry group; choose 4, 8 or 16 "
+                "with quarter-turn and mirror symmetries"
+            )
+
+
+def _priors(gng, lm, red, group, ex, n_directions) -> ActionPriors:  # type: ignore[no-untyped-def]
+    """Action priors from the exploration: the context before each move, mapped to its
+    template, and the move turned into the template's frame."""
+    same_world = ex.world[1:] == ex.world[:-1]
+    before = ex.readings[:-1][same_world]
+    moves = ex.moves[1:][same_world]
+    landmark = lm.node_landmark[gng.predict(before)]
+    template = red.template_of[landmark]
+    mats = group.matrices[red.element[landmark]]
+    turned = np.einsum("nij,nj->ni", mats, moves)
+    return ActionPriors.from_moves(template, turned, len(red.templates), n_directions)
+
+
+def _jsonable(x: Any) -> Any:
+    if isinstance(x, dict):
+        return {k: _jsonable(v) for k, v in x.items()}
+    if isinstance(x, list | tuple):
+        return [_jsonable(v) for v in x]
+    if isinstance(x, np.integer):
+        return int(x)
+    if isinstance(x, np.floating):
+        return float(x)
+    return x

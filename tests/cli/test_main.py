@@ -128,3 +128,31 @@ def test_import_movingai_then_plan(tmp_path: Path, capsys: pytest.CaptureFixture
         ["world", "import-movingai", str(world_file), "-o", str(tmp_path / "x.json")], capsys
     )
     assert code == 2 and "expected 'key value' header" in err and "Traceback" not in err
+
+
+def test_learn_inspect_figures(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    caps = tmp_path / "caps.npz"
+    code, out, _ = run(
+        ["learn", "-o", str(caps), "--worlds", "4", "--steps", "120", "--directions", "8"], capsys
+    )
+    assert code == 0 and "capability learning" in out and "policies" in out
+    code, out, _ = run(["inspect", str(caps), "--json"], capsys)
+    info = json.loads(out)
+    assert info["summary"]["directions"] == 8 and info["params"]["worlds"] == 4
+    code, out, _ = run(["inspect", str(caps)], capsys)
+    assert code == 0 and "templates" in out
+    figs = tmp_path / "figs"
+    code, out, _ = run(["figures", str(caps), "-o", str(figs)], capsys)
+    assert code == 0
+    assert sorted(p.name for p in figs.iterdir()) == [
+        "fig1_context_map.png",
+        "fig1_landmarks.png",
+        "fig1_policies.png",
+        "fig1_skeleton_curve.png",
+        "fig2_automaton.png",
+    ]
+    caps.write_bytes(caps.read_bytes()[:100])
+    code, _, err = run(["inspect", str(caps)], capsys)
+    assert code == 2 and "not a complete .npz archive" in err and "Traceback" not in err
+    code, _, err = run(["learn", "-o", str(caps), "--directions", "5"], capsys)
+    assert code == 2 and "directions must be 4, 8 or 16" in err

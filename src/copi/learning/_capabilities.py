@@ -159,7 +159,8 @@ class Capabilities:
         if p.is_dir():
             raise CapabilitiesFormatError(f"{p}: is a directory, expected a .npz capabilities file")
         try:
-            with np.load(p, allow_pickle=False) as data:
+            # Our own handle, closed whatever np.load makes of a broken file.
+            with open(p, "rb") as fh, np.load(fh, allow_pickle=False) as data:
                 arrays = {k: data[k] for k in data.files}
         except (zipfile.BadZipFile, EOFError) as exc:
             raise CapabilitiesFormatError(

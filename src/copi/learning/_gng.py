@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
-from sklearn.base import BaseEstimator, ClusterMixin
+from sklearn.base import BaseEstimator, ClusterMixin, TransformerMixin
 from sklearn.utils import check_random_state
 from sklearn.utils._param_validation import Interval
 from sklearn.utils.validation import check_is_fitted, validate_data
@@ -20,7 +20,7 @@ __all__ = ["GrowingNeuralGas"]
 _MAX_CAPACITY = 20_000
 
 
-class GrowingNeuralGas(ClusterMixin, BaseEstimator):  # type: ignore[misc]
+class GrowingNeuralGas(ClusterMixin, TransformerMixin, BaseEstimator):  # type: ignore[misc]
     """Fritzke's Growing Neural Gas: a graph of nodes that grows to model the topology
     and the distribution of its input (Fritzke 1995; the paper's context map, §II-A).
 
@@ -242,6 +242,11 @@ class GrowingNeuralGas(ClusterMixin, BaseEstimator):  # type: ignore[misc]
                 int(i), int(j), length=float(np.linalg.norm(self.nodes_[i] - self.nodes_[j]))
             )
         return g
+
+    def __sklearn_is_fitted__(self) -> bool:
+        # The parameter lambda_ ends with "_", which scikit-learn's default test would
+        # mistake for a fitted attribute.
+        return hasattr(self, "nodes_")
 
     def __sklearn_tags__(self) -> Any:
         tags = super().__sklearn_tags__()

@@ -6,10 +6,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from copi.errors import CapabilitiesFormatError
+from copi.errors import CapabilitiesFormatError, InvalidArgumentError
 from copi.learning import FORMAT_VERSION, Capabilities, LearnParams, learn
 
 SMALL = LearnParams(worlds=6, steps=150, seed=1)
@@ -33,9 +33,13 @@ def caps() -> Capabilities:
 )
 def test_round_trip(tmp_path: Path, directions, learner, landmarks, seed) -> None:
     params = LearnParams(
-        worlds=4, steps=120, seed=seed, directions=directions, learner=learner, landmarks=landmarks
+        worlds=6, steps=150, seed=seed, directions=directions, learner=learner, landmarks=landmarks
     )
-    c = learn(params)
+    try:
+        c = learn(params)
+    except InvalidArgumentError:
+        assume(False)  # more landmarks asked than this small map has nodes, or fewer than parts
+        return
     path = c.save(tmp_path / f"c{seed}.npz")
     back = Capabilities.load(path)
     assert back.equals(c)

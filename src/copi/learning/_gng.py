@@ -140,6 +140,7 @@ class GrowingNeuralGas(ClusterMixin, TransformerMixin, BaseEstimator):  # type: 
         self._w[0], self._w[1] = X[first[0]], X[first[1]]
         self._err = np.zeros(2)
         self._age = np.full((2, 2), -1, dtype=np.int32)
+        self._nbr = np.zeros((2, 2), dtype=np.int32)
         self._deg = np.zeros(2, dtype=np.int32)
         self._n = 2
         self.n_samples_seen_ = 0
@@ -161,6 +162,7 @@ class GrowingNeuralGas(ClusterMixin, TransformerMixin, BaseEstimator):  # type: 
             self._w,
             self._err,
             self._age,
+            self._nbr,
             self._deg,
             self._n,
             self.n_samples_seen_,
@@ -186,9 +188,11 @@ class GrowingNeuralGas(ClusterMixin, TransformerMixin, BaseEstimator):  # type: 
         err[:old] = self._err
         age = np.full((cap, cap), -1, dtype=np.int32)
         age[:old, :old] = self._age
+        nbr = np.zeros((cap, cap), dtype=np.int32)
+        nbr[:old, :old] = self._nbr
         deg = np.zeros(cap, dtype=np.int32)
         deg[:old] = self._deg
-        self._w, self._err, self._age, self._deg = w, err, age, deg
+        self._w, self._err, self._age, self._nbr, self._deg = w, err, age, nbr, deg
 
     def _publish(self) -> None:
         n = self._n

@@ -91,7 +91,8 @@ def main() -> bool:
     if not quick:
         rel = abs(qe / ref_qe - 1)
         print(
-            f"quantisation error {qe:.6f} vs plain reference {ref_qe:.6f}: {rel:.2e} relative (goal < 2 %)"
+            f"quantisation error {qe:.6f} vs plain reference {ref_qe:.6f}: "
+            f"{rel:.2e} relative (goal < 2 %)"
         )
         ok &= rel < 0.02
     return ok

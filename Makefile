@@ -24,6 +24,8 @@ $(STAMP): pyproject.toml
 run: install
 	$(BIN)/copi world sample --seed 0 -n 4 -o $(RESULTS)/worlds.json
 	$(BIN)/copi world show $(RESULTS)/worlds.json -o $(RESULTS) --gif
+	$(BIN)/copi learn -o $(RESULTS)/capabilities.npz
+	$(BIN)/copi figures $(RESULTS)/capabilities.npz -o $(RESULTS)/figures
 
 lint: install
 	$(BIN)/ruff check src tests benchmarks

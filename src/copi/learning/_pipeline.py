@@ -104,7 +104,11 @@ def learn(params: LearnParams | None = None, *, progress: Progress | None = None
     t0 = time.perf_counter()
     report("context map", 0, 1)
     gng = GrowingNeuralGas(p.max_nodes, epochs=p.epochs, random_state=p.seed).fit(ex.readings)
-    qe = gng.quantization_error(ex.readings)
+    dist = gng.transform(ex.readings).min(1)
+    qe = float(dist.mean())
+    # Online, a reading farther than this from every node is "unfamiliar" (§III): the
+    # distance that 99 % of the training readings are within.
+    familiar = float(np.percentile(dist, 99))
     report("context map", 1, 1)
     stages.append(
         {
@@ -173,7 +177,11 @@ def learn(params: LearnParams | None = None, *, progress: Progress | None = None
         policies=policies,
         priors=priors,
         params={k: v for k, v in dataclasses.asdict(p).items()},
-        stats={"stages": _jsonable(stages), "quantization_error": float(qe)},
+        stats={
+            "stages": _jsonable(stages),
+            "quantization_error": float(qe),
+            "familiarity_threshold": familiar,
+        },
     )
 
 

@@ -124,12 +124,17 @@ class Simulator:
     ) -> Simulator:
         """Draw a task in ``world``: start and goal (unless the world fixes them), then the
         moving obstacles (``obstacles``, else the world's spec, else the paper's), all from
-        ``seed``. Obstacles start clear of the agent by at least one agent step."""
+        ``seed``. Obstacles start clear of the agent and of the goal by at least one agent
+        step (so that the snapshot at t = 0 has the goal free)."""
         rng = as_generator(seed)
         start, goal = sample_start_goal(world, rng, radius=agent_radius, min_distance=min_distance)
         spec = obstacles or world.obstacles or ObstacleSpec()
         centers, radii = place_obstacles(
-            world, rng, spec=spec, keep_clear=start, keep_clear_radius=agent_radius + 1.0
+            world,
+            rng,
+            spec=spec,
+            keep_clear=np.vstack([start, goal]),
+            keep_clear_radius=agent_radius + 1.0,
         )
         return cls(
             world,

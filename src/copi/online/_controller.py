@@ -1,0 +1,281 @@
+"""Online policy instantiation (paper §III): the lookup chain from a reading to an action."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from copi.errors import InvalidArgumentError
+from copi.learning import Capabilities, GrowingNeuralGas
+from copi.learning._gng_kernels import nearest as _nearest_kernel
+from copi.online import _kernels
+
+__all__ = ["ContextController", "Decision"]
+
+
+@dataclass(frozen=True)
+class Decision:
+    """One decision, explained (``ContextController.decide(..., explain=True)``)."""
+
+    node: int
+    """chi_t: the context map's node nearest to the reading (Euclidean d_S)."""
+    distance: float
+    """d_S(s_t, chi_t), agent steps."""
+    unfamiliar: bool
+    """Whether the distance exceeded the familiarity threshold."""
+    landmark: int
+    """chi^_t: the node's landmark by graph distance d_G."""
+    template: int
+    """chi~_t: the reduced landmark (template) the landmark maps onto."""
+    element: str
+    """The group element g (as an operator word) with template ~ g . landmark."""
+    candidates: list[str]
+    """Directions (template frame) of the template's policies, i.e. g^-1 pi(chi~_t)."""
+    candidate_actions: NDArray[np.float64]
+    """Those policies' first moves mapped back to the world by g^-1, shape (k, 2)."""
+    choice: str | None
+    """The direction the global strategy picked (None: no policy here)."""
+    action: NDArray[np.float64]
+    """The velocity sent to the world."""
+
+
+class ContextController:
+    """The paper's online chain (§III), from a sensor reading to a velocity.
+
+    1. chi_t = argmin over the context map's nodes of d_S(s_t, chi), Euclidean;
+    2. chi^_t = the landmark of chi_t by graph distance d_G (precomputed per node);
+    3. (chi~_t, g_t) = the template of chi^_t and the group element with
+       chi~_t ~ g_t . chi^_t (precomputed per landmark);
+    4. candidates = g_t^-1 . pi for every policy pi of chi~_t: the template's first
+       moves turned back into the world frame (precomputed per node);
+    5. a global strategy's desired direction picks the candidate best aligned with it,
+       and sets the step length (never past the point it aims at).
+
+    So a decision is one nearest-neighbour search and table lookups. Readings farther
+    than ``threshold`` from every node are flagged unfamiliar; with ``continual`` they
+    also train a second, growing map whose nodes attach to the landmark (and symmetry)
+    that fits them best, so the agent grows contexts for what it had not seen (§III:
+    "the agent may reinstate the GNG learning temporarily").
+
+    Parameters
+    ----------
+    capabilities : Capabilities
+    threshold : float, optional
+        Familiarity threshold on d_S; default: the distance within which 99 % of the
+        training readings lay from their nearest node (stored at learning time), or
+        twice the mean quantisation error for files that lack it.
+    continual : bool
+        Learn unfamiliar contexts as they come.
+    guard : float
+        0 (the paper's chain, the default) or a clearance: a candidate policy is then kept
+        only if the live reading's hit points stay at least ``guard`` from the path its
+        step sweeps, i.e. the template's passability is checked against the context it
+        is instantiated in (if no candidate passes, the one with the most room is
+        taken). Typically the agent radius plus an obstacle's step plus a margin.
+    """
+
+    def __init__(
+        self,
+        capabilities: Capabilities,
+        *,
+        threshold: float | None = None,
+        continual: bool = False,
+        guard: float = 0.0,
+    ) -> None:
+        caps = capabilities
+        self.capabilities = caps
+        self.n_rays = caps.n_rays
+        self.names = list(caps.policies.names)
+        stats = caps.stats
+        if threshold is None:
+            threshold = stats.get("familiarity_threshold")
+            if threshold is None:
+                threshold = 2.0 * float(stats.get("quantization_error", np.inf))
+        self.threshold = float(threshold)
+        self.continual = bool(continual)
+        if not (math.isfinite(guard) and guard >= 0):
+            raise InvalidArgumentError(f"guard must be a finite number >= 0; got {guard!r}")
+        self.guard = float(guard)
+        from copi.geometry import ring_angles
+
+        angles = ring_angles(self.n_rays)
+        self._cos = np.cos(angles)
+        self._sin = np.sin(angles)
+        self.max_range = float(caps.params.get("max_range", 10.0))
+        self._out = np.empty(5)
+        self._nodes = np.ascontiguousarray(caps.nodes, dtype=np.float64)
+        self._landmark = caps.landmarks.node_landmark
+        self._template = caps.node_template
+        self._element = caps.node_element
+        self._tables(self._template, self._element)
+        self._idx = np.empty(1, dtype=np.int64)
+        self._d2 = np.empty(1)
+        self._extra: GrowingNeuralGas | None = None
+        self._pending: list[NDArray[np.float64]] = []
+        self._extra_template = np.zeros(0, dtype=np.int64)
+        self._extra_element = np.zeros(0, dtype=np.int64)
+        self.n_decisions = 0
+        self.n_unfamiliar = 0
+
+    def _tables(self, template: NDArray[np.int64], element: NDArray[np.int64]) -> None:
+        pol = self.capabilities.policies
+        mats = self.capabilities.group.matrices[element]  # (N, 2, 2)
+        # g^-1 = g^T for the ring's rotations and mirrors; solve() keeps any matrix exact.
+        acts = pol.actions[template]  # (N, D, 2)
+        self._cand = np.ascontiguousarray(np.linalg.solve(mats[:, None], acts[..., None])[..., 0])
+        self._ok = np.ascontiguousarray(pol.passable[template])
+
+    # -- the chain ---------------------------------------------------------------------
+
+    def _check(self, ranges: Any) -> NDArray[np.float64]:
+        s = np.asarray(ranges, dtype=np.float64)
+        if s.shape[-1:] != (self.n_rays,):
+            raise InvalidArgumentError(
+                f"readings must have {self.n_rays} rays (as the capabilities); got shape {s.shape}"
+            )
+        if not np.isfinite(s).all():
+            raise InvalidArgumentError("readings must be finite")
+        return s
+
+    def lookup(self, ranges: Any) -> tuple[int, float]:
+        """chi_t and d_S(s_t, chi_t) for one reading (steps 1)."""
+        s = self._check(ranges)
+        _nearest_kernel(s[None], self._nodes, len(self._nodes), self._idx, self._d2)
+        return int(self._idx[0]), math.sqrt(self._d2[0])
+
+    def decide(
+        self, ranges: Any, desired: Any, *, reach: float = math.inf, explain: bool = False
+    ) -> tuple[NDArray[np.float64], Decision | None]:
+        """The velocity for one reading, given the global strategy's desired direction.
+
+        Parameters
+        ----------
+        ranges : array_like of shape (n_rays,)
+        desired : array_like of shape (2,)
+            Where the global strategy wants to go (any length).
+        reach : float
+            How far the strategy's aim lies along ``desired``: the step is cut so as not
+            to go past it (1 at most).
+        explain : bool
+            Also return a :class:`Decision` saying how the action came about.
+        """
+        s = np.asarray(ranges, dtype=np.float64)
+        if s.shape != (self.n_rays,):
+            raise InvalidArgumentError(
+                f"a reading must have shape ({self.n_rays},) (as the capabilities); got {s.shape}"
+            )
+        want = np.asarray(desired, dtype=np.float64)
+        out = self._out
+        nodes, cand, ok = self._nodes, self._cand, self._ok
+        _kernels.decide(
+            s, nodes, cand, ok, want[0], want[1], float(reach), self.guard,
+            self._cos, self._sin, self.max_range, out,
+        )  # fmt: skip
+        if out[2] < 0:
+            raise InvalidArgumentError(f"readings must be finite; got {s.tolist()}")
+        self.n_decisions += 1
+        dist = math.sqrt(out[3])
+        unfamiliar = dist > self.threshold
+        if unfamiliar:
+            self.n_unfamiliar += 1
+            if self.continual:
+                nodes, cand, ok = self._learn_unfamiliar(s)
+                _kernels.decide(
+                    s, nodes, cand, ok, want[0], want[1], float(reach), self.guard,
+                    self._cos, self._sin, self.max_range, out,
+                )  # fmt: skip
+        action = out[:2].copy()
+        if not explain:
+            return action, None
+        node, choice = int(out[2]), int(out[4])
+        extra = node >= len(self._nodes)
+        t = int(self._extra_template[node - len(self._nodes)] if extra else self._template[node])
+        g = int(self._extra_element[node - len(self._nodes)] if extra else self._element[node])
+        mask = ok[node]
+        return action, Decision(
+            node=node,
+            distance=float(dist),
+            unfamiliar=bool(unfamiliar),
+            landmark=-1 if extra else int(self._landmark[node]),
+            template=t,
+            element=self.capabilities.group.words[g] or "id",
+            candidates=[self.names[d] for d in np.flatnonzero(mask)],
+            candidate_actions=cand[node][mask].copy(),
+            choice=None if choice < 0 else self.names[choice],
+            action=action,
+        )
+
+    def decide_batch(
+        self, ranges: Any, desired: Any, reach: Any = None
+    ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+        """Velocities for many agents at once (same results as :meth:`decide` row by
+        row); returns (actions (b, 2), nodes (b,))."""
+        s = self._check(ranges)
+        if s.ndim != 2:
+            raise InvalidArgumentError(f"readings must have shape (b, {self.n_rays}); got {s.shape}")
+        want = np.asarray(desired, dtype=np.float64).reshape(-1, 2)
+        if len(want) != len(s):
+            raise InvalidArgumentError(f"desired must have shape ({len(s)}, 2); got {want.shape}")
+        r = np.full(len(s), math.inf) if reach is None else np.asarray(reach, dtype=np.float64)
+        out = np.empty((len(s), 5))
+        _kernels.decide_batch(
+            np.ascontiguousarray(s), self._nodes, self._cand, self._ok, want, r, self.guard,
+            self._cos, self._sin, self.max_range, out,
+        )  # fmt: skip
+        if (out[:, 2] < 0).any():
+            raise InvalidArgumentError("readings must be finite")
+        self.n_decisions += len(s)
+        self.n_unfamiliar += int((np.sqrt(out[:, 3]) > self.threshold).sum())
+        return out[:, :2].copy(), out[:, 2].astype(np.int64)
+
+    # -- continual learning ----------------------------------------------------------
+
+    def _learn_unfamiliar(self, s: NDArray[np.float64]):  # type: ignore[no-untyped-def]
+        """Feed an unfamiliar reading to the second map (started once two have come);
+        return nodes and tables covering both maps."""
+        if self._extra is None:
+            self._pending.append(s)
+            if len(self._pending) < 2:
+                return self._nodes, self._cand, self._ok
+            self._extra = GrowingNeuralGas(max_nodes=200, lambda_=20, random_state=0)
+            self._extra.partial_fit(np.array(self._pending))
+        else:
+            self._extra.partial_fit(s[None])
+        new = self._extra.nodes_
+        self._attach(new)
+        return np.ascontiguousarray(np.concatenate([self._nodes, new])), self._all_cand, self._all_ok
+
+    def _attach(self, new: NDArray[np.float64]) -> None:
+        """Give each new node the landmark and symmetry h that fit it best
+        (landmark ~ h . node); its template is then ~ g . h . node, g the landmark's."""
+        caps = self.capabilities
+        lm, red, group = caps.landmarks.points, caps.reduction, caps.group
+        moved = new[:, group.perms]  # (m, G, n): h . node for every h
+        res = ((moved[:, None, :, :] - lm[None, :, None, :]) ** 2).mean(-1)  # (m, L, G)
+        flat = res.reshape(len(new), -1).argmin(1)
+        best_lm, h = np.divmod(flat, len(group))
+        self._extra_template = red.template_of[best_lm]
+        self._extra_element = np.array(
+            [group.compose(int(red.element[j]), int(e)) for j, e in zip(best_lm, h, strict=True)],
+            dtype=np.int64,
+        )
+        pol = caps.policies
+        mats = group.matrices[self._extra_element]
+        acts = pol.actions[self._extra_template]
+        cand = np.linalg.solve(mats[:, None], acts[..., None])[..., 0]
+        self._all_cand = np.concatenate([self._cand, cand])
+        self._all_ok = np.concatenate([self._ok, pol.passable[self._extra_template]])
+
+    @property
+    def n_learnt(self) -> int:
+        """Nodes grown online for unfamiliar contexts (continual mode)."""
+        return 0 if self._extra is None else len(self._extra.nodes_)
+
+    @property
+    def unfamiliar_rate(self) -> float:
+        """Share of decisions so far whose reading was unfamiliar."""
+        return self.n_unfamiliar / self.n_decisions if self.n_decisions else 0.0

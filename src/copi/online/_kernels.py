@@ -1,0 +1,126 @@
+"""Compiled online decision: nearest node, table lookup, candidate choice, optional guard.
+
+Why by hand: a decision is a 600 x 32 nearest-neighbour search and a handful of lookups;
+in numpy each of the dozen small steps costs a microsecond of call overhead, so the
+whole chain is one compiled function (about 3 µs, most of it the search). The same
+function serves one agent and a batch, so both give identical results.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from copi.learning._gng_kernels import FAST
+
+
+@njit(cache=True, inline="always", fastmath=FAST)
+def _nearest(x, nodes):  # type: ignore[no-untyped-def]
+    best = -1
+    bd = np.inf
+    d = x.shape[0]
+    for i in range(nodes.shape[0]):
+        acc = 0.0
+        for j in range(d):
+            diff = x[j] - nodes[i, j]
+            acc += diff * diff
+        if acc < bd:
+            bd = acc
+            best = i
+    return best, bd
+
+
+@njit(cache=True)
+def decide(  # type: ignore[no-untyped-def]
+    s, nodes, cand, ok, wx, wy, reach, guard, cos, sin, max_range, out
+):
+    """One decision for reading ``s`` and desired direction (wx, wy).
+
+    Writes out = (ax, ay, node, d2, choice); choice -1: no candidate; node -1: the
+    reading is not finite (nothing else is computed).
+
+    With ``guard`` > 0, a candidate is kept only if the reading's hit points stay at
+    least ``guard`` from the path its step would sweep (the template's passability
+    checked against the live reading); if none is left, the least bad one is taken.
+    """
+    for i in range(s.shape[0]):
+        if not math.isfinite(s[i]):
+            out[2] = -1.0
+            return
+    node, d2 = _nearest(s, nodes)
+    out[2] = node
+    out[3] = d2
+    norm = math.sqrt(wx * wx + wy * wy)
+    out[0] = 0.0
+    out[1] = 0.0
+    out[4] = -1.0
+    if norm == 0.0:
+        return
+    ux = wx / norm
+    uy = wy / norm
+    n_dir = cand.shape[1]
+    best = -1
+    best_score = -np.inf
+    fallback = -1
+    fallback_clear = -np.inf
+    for d in range(n_dir):
+        if not ok[node, d]:
+            continue
+        ax = cand[node, d, 0]
+        ay = cand[node, d, 1]
+        score = ax * ux + ay * uy
+        if guard > 0.0:
+            step = 1.0
+            if math.isfinite(reach):
+                along = score * reach
+                if along > 0.0:
+                    step = min(1.0, along)
+            clear = np.inf
+            for i in range(s.shape[0]):
+                if s[i] >= max_range:
+                    continue
+                px = s[i] * cos[i]
+                py = s[i] * sin[i]
+                t = px * ax + py * ay
+                if t < 0.0:
+                    t = 0.0
+                elif t > step:
+                    t = step
+                dx = px - t * ax
+                dy = py - t * ay
+                dd = math.sqrt(dx * dx + dy * dy)
+                if dd < clear:
+                    clear = dd
+            if clear < guard:
+                if clear > fallback_clear:
+                    fallback_clear = clear
+                    fallback = d
+                continue
+        if score > best_score:
+            best_score = score
+            best = d
+    if best < 0:
+        best = fallback
+    if best < 0:
+        return
+    ax = cand[node, best, 0]
+    ay = cand[node, best, 1]
+    step = 1.0
+    if math.isfinite(reach):
+        along = (ax * ux + ay * uy) * reach
+        if along > 0.0:
+            step = min(1.0, along)
+    out[0] = ax * step
+    out[1] = ay * step
+    out[4] = best
+
+
+@njit(cache=True)
+def decide_batch(  # type: ignore[no-untyped-def]
+    s, nodes, cand, ok, want, reach, guard, cos, sin, max_range, out
+):
+    """:func:`decide` for each row; out has shape (b, 5)."""
+    for b in range(s.shape[0]):
+        decide(s[b], nodes, cand, ok, want[b, 0], want[b, 1], reach[b], guard, cos, sin, max_range, out[b])

@@ -329,6 +329,143 @@ def figures_command(
         out.print(str(path))
 
 
+@app.command("evaluate")
+def evaluate_command(
+    capabilities: Annotated[Path, typer.Argument(help="Capabilities file (.npz).")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="Results file (SQLite).")],
+    worlds: Annotated[int, typer.Option("--worlds", min=1, help="Episodes (paper: 1549).")] = 1549,
+    world_file: Annotated[
+        Path | None, typer.Option("--world-file", help="Run these worlds instead of random ones.")
+    ] = None,
+    seed: Annotated[int, typer.Option("--seed", min=0, help="Seed of the episodes.")] = 0,
+    workers: Annotated[int, typer.Option("--workers", min=1, help="Local processes.")] = 1,
+    scheduler: Annotated[
+        str | None, typer.Option("--scheduler", help="Dask scheduler tcp://HOST:PORT instead.")
+    ] = None,
+    strategy: Annotated[str, typer.Option("--strategy", help="route or greedy.")] = "route",
+    max_steps: Annotated[int, typer.Option("--max-steps", min=1, help="Step limit.")] = 1000,
+    method: Annotated[str, typer.Option("--method", help="Label of this method.")] = "copi",
+    guard: Annotated[
+        float, typer.Option("--guard", min=0.0, help="Check candidates against the live reading.")
+    ] = 0.0,
+    continual: Annotated[
+        bool, typer.Option("--continual", help="Learn unfamiliar contexts online.")
+    ] = False,
+) -> None:
+    """Experiment 1 (paper §IV): reach goals in dynamic worlds never seen; each episode's
+    path is compared with the optimum on the stationary snapshot. Rerunning the same
+    command resumes an interrupted run."""
+    from copi.experiments.navigation import NavigationConfig, evaluate
+    from copi.experiments.report import summarize
+    from copi.experiments.store import ResultsStore
+
+    if world_file is not None:
+        from copi.world import load_worlds
+
+        load_worlds(world_file)  # a bad file is refused before anything is written
+    config = NavigationConfig(
+        capabilities=str(capabilities),
+        method=method,
+        worlds=worlds,
+        world_file=str(world_file) if world_file is not None else None,
+        seed=seed,
+        strategy=strategy,
+        max_steps=max_steps,
+        guard=guard,
+        continual=continual,
+    )
+    _check_sensor(capabilities, world_file)
+    output.parent.mkdir(parents=True, exist_ok=True)
+    with progress() as bar:
+        task = bar.add_task(f"{method}: episodes", total=worlds)
+        run_id = evaluate(
+            config,
+            output,
+            workers=workers,
+            scheduler=scheduler,
+            progress=lambda done, total: bar.update(task, completed=done),
+        )
+    with ResultsStore(output) as store:
+        s = summarize(store.episodes(run_id))
+    out.print(
+        f"{output}: {method}: {s['episodes']} episodes, success {100 * s['success']:.1f} %, "
+        f"contact {100 * s['contact']:.1f} %, timeout {100 * s['timeout']:.1f} %, median excess "
+        f"{100 * s['excess_median']:.1f} %, {s['decisions_per_s']:,.0f} decisions/s"
+    )
+
+
+def _check_sensor(capabilities: Path, world_file: Path | None) -> None:
+    """The capabilities must describe the sensor the experiment uses (32 rays)."""
+    from copi.errors import InvalidArgumentError
+    from copi.learning import Capabilities
+
+    caps = Capabilities.load(capabilities)
+    expected = int(caps.params.get("n_rays", caps.n_rays))
+    if caps.n_rays != expected:
+        raise InvalidArgumentError(
+            f"{capabilities}: its map has {caps.n_rays} rays but its sensor {expected}"
+        )
+    del world_file
+
+
+@app.command("report")
+def report_command(
+    results: Annotated[list[Path], typer.Argument(help="Results files (SQLite).")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="Directory for the report.")],
+) -> None:
+    """Write report.md with the summary table and the paper's Fig. 3 and Fig. 4."""
+    from copi.errors import InvalidArgumentError
+    from copi.experiments.report import write_report
+
+    for r in results:
+        if not r.exists():
+            raise InvalidArgumentError(f"{r}: no such results file")
+    path = write_report([str(r) for r in results], output)
+    out.print(str(path))
+
+
+@app.command("reproduce")
+def reproduce_command(
+    output: Annotated[Path, typer.Option("-o", "--output", help="Directory for everything.")],
+    quick: Annotated[
+        bool, typer.Option("--quick", help="A small run (100 episodes) to try things out.")
+    ] = False,
+    workers: Annotated[int, typer.Option("--workers", min=1, help="Local processes.")] = 2,
+    seed: Annotated[int, typer.Option("--seed", min=0, help="Seed of learning and episodes.")] = 0,
+) -> None:
+    """The paper's Experiment 1 end to end: learn capabilities (100 worlds x 300 steps),
+    evaluate on 1549 dynamic worlds in the faithful mode (4 directions, the paper's chain)
+    and the extended mode (16 directions, candidates checked against the live reading),
+    and write the report."""
+    from copi.experiments.navigation import NavigationConfig, evaluate
+    from copi.experiments.report import write_report
+    from copi.learning import LearnParams, learn
+
+    output.mkdir(parents=True, exist_ok=True)
+    episodes = 100 if quick else 1549
+    results = output / "experiment1.sqlite"
+    modes = [("faithful", 4, 0.0), ("extended", 16, 1.0)]
+    with progress() as bar:
+        for name, directions, guard in modes:
+            caps_path = output / f"capabilities-{name}.npz"
+            if not caps_path.exists():
+                bar_task = bar.add_task(f"learn ({name})", total=1)
+                learn(LearnParams(seed=seed, directions=directions)).save(caps_path)
+                bar.update(bar_task, completed=1)
+            eval_task = bar.add_task(f"evaluate ({name})", total=episodes)
+
+            def advance(done: int, total: int, task: Any = eval_task) -> None:
+                bar.update(task, completed=done)
+
+            config = NavigationConfig(
+                capabilities=str(caps_path), method=name, worlds=episodes, seed=seed, guard=guard
+            )
+            evaluate(config, results, workers=workers, progress=advance)
+    report = write_report([str(results)], output)
+    out.print(report.read_text(encoding="utf-8").split("Runs:")[0])
+    out.print(str(report))
+
+
 def main(argv: list[str] | None = None) -> None:
     """Run the command line; bad input ends with one line on stderr and exit code 2."""
     try:

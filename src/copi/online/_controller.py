@@ -216,7 +216,9 @@ class ContextController:
         row); returns (actions (b, 2), nodes (b,))."""
         s = self._check(ranges)
         if s.ndim != 2:
-            raise InvalidArgumentError(f"readings must have shape (b, {self.n_rays}); got {s.shape}")
+            raise InvalidArgumentError(
+                f"readings must have shape (b, {self.n_rays}); got {s.shape}"
+            )
         want = np.asarray(desired, dtype=np.float64).reshape(-1, 2)
         if len(want) != len(s):
             raise InvalidArgumentError(f"desired must have shape ({len(s)}, 2); got {want.shape}")
@@ -247,7 +249,11 @@ class ContextController:
             self._extra.partial_fit(s[None])
         new = self._extra.nodes_
         self._attach(new)
-        return np.ascontiguousarray(np.concatenate([self._nodes, new])), self._all_cand, self._all_ok
+        return (
+            np.ascontiguousarray(np.concatenate([self._nodes, new])),
+            self._all_cand,
+            self._all_ok,
+        )
 
     def _attach(self, new: NDArray[np.float64]) -> None:
         """Give each new node the landmark and symmetry h that fit it best

@@ -123,4 +123,17 @@ def decide_batch(  # type: ignore[no-untyped-def]
 ):
     """:func:`decide` for each row; out has shape (b, 5)."""
     for b in range(s.shape[0]):
-        decide(s[b], nodes, cand, ok, want[b, 0], want[b, 1], reach[b], guard, cos, sin, max_range, out[b])
+        decide(
+            s[b],
+            nodes,
+            cand,
+            ok,
+            want[b, 0],
+            want[b, 1],
+            reach[b],
+            guard,
+            cos,
+            sin,
+            max_range,
+            out[b],
+        )

@@ -1,0 +1,191 @@
+"""The report of Experiment 1: summary table, Fig. 3 and Fig. 4, read back from results
+files only (nothing is recomputed here)."""
+
+from __future__ import annotations
+
+import math
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from copi.experiments.figures import _figure
+from copi.experiments.store import ResultsStore
+from copi.world import World, draw_world
+
+__all__ = ["summarize", "write_report"]
+
+SUMMARY_COLUMNS = [
+    ("method", "method"),
+    ("episodes", "episodes"),
+    ("success", "success"),
+    ("contact", "contact"),
+    ("timeout", "timeout"),
+    ("excess_median", "median excess"),
+    ("excess_mean", "mean excess"),
+    ("excess_p90", "p90 excess"),
+    ("decisions_per_s", "decisions / s"),
+    ("decision_us", "µs / decision"),
+    ("unfamiliar", "unfamiliar"),
+]
+
+
+def summarize(rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """Summary of one method's episodes. Excess statistics are over successful episodes
+    (reached, no contact), as in the paper."""
+    n = len(rows)
+    if n == 0:
+        return {"episodes": 0}
+    success = np.array([r["success"] for r in rows], dtype=bool)
+    excess = np.array(
+        [r["excess"] for r in rows if r["success"] and r["excess"] is not None], dtype=float
+    )
+    dec = np.array([r["decision_us"] for r in rows if r["decision_us"] is not None], dtype=float)
+    steps = np.array([r["steps"] for r in rows], dtype=float)
+    mean_us = (
+        float((dec * steps[: len(dec)]).sum() / steps[: len(dec)].sum()) if len(dec) else math.nan
+    )
+    return {
+        "episodes": n,
+        "success": float(success.mean()),
+        "reached": float(np.mean([r["reached"] for r in rows])),
+        "contact": float(np.mean([r["collided"] for r in rows])),
+        "timeout": float(np.mean([r["timed_out"] for r in rows])),
+        "excess_median": float(np.median(excess)) if len(excess) else math.nan,
+        "excess_mean": float(excess.mean()) if len(excess) else math.nan,
+        "excess_p90": float(np.percentile(excess, 90)) if len(excess) else math.nan,
+        "decision_us": mean_us,
+        "decisions_per_s": 1e6 / mean_us if mean_us > 0 else math.nan,
+        "unfamiliar": float(np.mean([r["unfamiliar"] or 0.0 for r in rows])),
+        "no_optimum": int(sum(r["optimal_length"] is None for r in rows)),
+    }
+
+
+def _fmt(key: str, value: Any) -> str:
+    if isinstance(value, str):
+        return value
+    if key in ("episodes",):
+        return str(value)
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return "—"
+    if key in ("success", "contact", "timeout", "unfamiliar") or key.startswith("excess"):
+        return f"{100 * value:.1f} %"
+    if key == "decisions_per_s":
+        return f"{value:,.0f}"
+    return f"{value:.2f}"
+
+
+def _fig3(trajectories: list[dict[str, Any]], out: Path, method: str) -> Path | None:
+    """Four worlds with obstacle traces, the agent's path in red and the goal."""
+    picks = trajectories[:4]
+    if not picks:
+        return None
+    fig = _figure(3.4 * len(picks), 3.6)
+    for i, t in enumerate(picks):
+        ax = fig.add_subplot(1, len(picks), i + 1)
+        world = World.from_dict(t["world"])
+        traces = np.asarray(t["traces"])
+        draw_world(
+            ax,
+            world,
+            centers=traces[-1],
+            radii=t["radii"],
+            traces=traces,
+            path=np.asarray(t["path"]),
+            start=t["path"][0],
+            goal=t["goal"],
+            title=f"episode {t['episode']}",
+        )
+    fig.suptitle(f"Fig. 3 — {method}: obstacle traces (blue), agent (red), goal", fontsize=9)
+    fig.tight_layout()
+    target = out / f"fig3_{_slug(method)}.png"
+    fig.savefig(target)
+    return target
+
+
+def _fig4(excess: dict[str, np.ndarray], out: Path) -> Path:
+    """Histogram of path excess over the stationary optimum, median marked (paper Fig. 4);
+    several methods side by side."""
+    fig = _figure(7.0, 4.2)
+    ax = fig.add_subplot()
+    finite = [e[np.isfinite(e)] for e in excess.values()]
+    hi = max([float(np.percentile(e, 98)) for e in finite if len(e)] + [0.5])
+    bins = np.linspace(0, hi, 40)
+    colours = ["#1f77b4", "#ff7f0e", "#9467bd", "#8c564b"]
+    for (method, e), c in zip(excess.items(), colours, strict=False):
+        e = e[np.isfinite(e)]
+        if not len(e):
+            continue
+        ax.hist(
+            np.clip(e, 0, hi), bins=bins, color=c, alpha=0.55, label=f"{method} ({len(e)} episodes)"
+        )
+        med = float(np.median(e))
+        ax.axvline(med, color="#2ca02c", lw=1.5)
+        ax.annotate(f"median {100 * med:.1f} %", (med, ax.get_ylim()[1] * 0.9), fontsize=8,
+                    color="#2ca02c", xytext=(4, 0), textcoords="offset points")  # fmt: skip
+    ax.set_xlabel("path excess over the stationary optimum (path / optimal - 1)")
+    ax.set_ylabel("episodes")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    target = out / "fig4_excess.png"
+    fig.savefig(target)
+    return target
+
+
+def _slug(s: str) -> str:
+    return "".join(c if c.isalnum() else "_" for c in s).strip("_").lower() or "run"
+
+
+def write_report(results: list[str | os.PathLike[str]], directory: str | os.PathLike[str]) -> Path:
+    """Write ``report.md`` and its figures for one or more results files."""
+    out = Path(directory)
+    out.mkdir(parents=True, exist_ok=True)
+    summaries: list[dict[str, Any]] = []
+    excess: dict[str, np.ndarray] = {}
+    figures: list[Path] = []
+    runs_info: list[str] = []
+    for path in results:
+        with ResultsStore(path) as store:
+            for run in store.runs():
+                if run["experiment"] != "navigation":
+                    continue
+                rows = store.episodes(run["run_id"])
+                label = run["method"]
+                s = summarize(rows)
+                s["method"] = label
+                summaries.append(s)
+                excess[label] = np.array(
+                    [r["excess"] for r in rows if r["success"] and r["excess"] is not None],
+                    dtype=float,
+                )
+                cfg = run["config"]
+                runs_info.append(
+                    f"- **{label}** (`{Path(path).name}`, run {run['run_id']}): {cfg['worlds']} "
+                    f"episodes, seed {cfg['seed']}, strategy {cfg['strategy']}, "
+                    f"guard {cfg['guard']}, max steps {cfg['max_steps']}; "
+                    f"copi {run['versions'].get('copi')}"
+                )
+                fig = _fig3(store.trajectories(run["run_id"], label), out, label)
+                if fig is not None:
+                    figures.append(fig)
+    if not summaries:
+        raise FileNotFoundError(f"no Experiment 1 runs in {', '.join(map(str, results))}")
+    figures.append(_fig4(excess, out))
+    lines = [
+        "# Experiment 1 — reaching goals in dynamic worlds",
+        "",
+        "Path excess = agent path length / optimal length on the stationary snapshot at "
+        "t = 0 (obstacles frozen) − 1, over successful episodes (goal reached within the "
+        "step limit, no contact), as in the paper's Fig. 4.",
+        "",
+        "| " + " | ".join(h for _, h in SUMMARY_COLUMNS) + " |",
+        "|" + "---|" * len(SUMMARY_COLUMNS),
+    ]
+    for s in summaries:
+        lines.append("| " + " | ".join(_fmt(k, s.get(k)) for k, _ in SUMMARY_COLUMNS) + " |")
+    lines += ["", "Runs:", *runs_info, ""]
+    lines += [f"![{f.stem}]({f.name})" for f in figures]
+    report = out / "report.md"
+    report.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return report

@@ -32,11 +32,11 @@ from copi.learning._symmetry import (
 )
 
 __all__ = [
-    "FORMAT_VERSION",
     "AStarLearner",
     "ActionPriors",
     "Capabilities",
     "Exploration",
+    "FORMAT_VERSION",
     "GrowingNeuralGas",
     "Landmarks",
     "LearnParams",

@@ -119,6 +119,12 @@ def scan_checked(origins, cos, sin, segs, centers, radii, max_range, out):  # ty
     return True
 
 
+# A disc touching a wall (to rounding) may move along it: only a move whose component
+# into the wall exceeds this (per unit of travel) counts as entering it. Sliding along
+# the tangent of a corner circle then stays within ~1e-9 of the contact distance.
+TANGENT = 1e-7
+
+
 @njit(cache=True, inline="always")
 def _sweep_one(ox, oy, dx, dy, segs, r):  # type: ignore[no-untyped-def]
     """Distance a disc of radius r at o can travel along the unit vector d before it
@@ -146,6 +152,10 @@ def _sweep_one(ox, oy, dx, dy, segs, r):  # type: ignore[no-untyped-def]
             if dn < 0.0:
                 t = (h - r) / -dn
                 if t < 0.0:
+                    # Already touching (to rounding): only a move clearly into the wall
+                    # is stopped; a tangential one slides on.
+                    if dn > -TANGENT:
+                        continue
                     t = 0.0
                 if t < best:
                     s = ((ox + t * dx - px) * ex + (oy + t * dy - py) * ey) / ll
@@ -161,6 +171,8 @@ def _sweep_one(ox, oy, dx, dy, segs, r):  # type: ignore[no-untyped-def]
                 continue
             cc = vx * vx + vy * vy - r * r
             if cc <= 0.0:
+                if b > -TANGENT:
+                    continue  # touching the corner and moving along it
                 t = 0.0
             else:
                 disc = b * b - cc

@@ -8,11 +8,13 @@ import math
 from typing import Any, Protocol
 
 import numpy as np
+import shapely
+import shapely.ops
 from numpy.typing import NDArray
 
 from copi.errors import InvalidArgumentError
 from copi.planning import VisibilityGraph, configuration_space, length_error_bound
-from copi.planning._kernels import segment_free
+from copi.planning._kernels import point_free, segment_free
 from copi.world import World
 
 __all__ = ["GlobalStrategy", "Greedy", "Route", "make_strategy"]
@@ -74,23 +76,39 @@ class Route:
         if plan is None or plan.path is None:
             self.waypoints = np.array([self.goal])
         else:
-            self.waypoints = plan.path[1:]
+            pts = plan.path[1:]
+            far = np.hypot(*(pts - position).T) > 1e-6
+            far[-1] = True  # the goal stays
+            self.waypoints = pts[far]
         self.next = 0
 
     def _sees(self, p: NDArray[np.float64], q: NDArray[np.float64]) -> bool:
         g = self.graph
         return bool(segment_free(p[0], p[1], q[0], q[1], g.xy, g.starts, g.eps))
 
+    def _inside(self, p: NDArray[np.float64]) -> NDArray[np.float64]:
+        """p itself, or its nearest point of the (polygonal) free space when p lies in the
+        thin band between it and the true one (a disc resting against a wall)."""
+        g = self.graph
+        if point_free(p[0], p[1], g.xy, g.starts, g.eps):
+            return p
+        near = shapely.ops.nearest_points(g.geometry, shapely.Point(p))[0]
+        return np.array([near.x, near.y])
+
     def aim(self, position: Any) -> tuple[NDArray[np.float64], float]:
         p = np.asarray(position, dtype=np.float64)
+        q = self._inside(p)
         w = self.waypoints
         # Look ahead along the route for the farthest waypoint in sight.
-        while self.next + 1 < len(w) and self._sees(p, w[self.next + 1]):
+        while self.next + 1 < len(w) and self._sees(q, w[self.next + 1]):
             self.next += 1
-        if not self._sees(p, w[self.next]):
+        if not self._sees(q, w[self.next]):
             self.replans += 1
-            self._plan(p)
+            self._plan(q)
             w = self.waypoints
+        # A waypoint already reached (within a hair) is passed.
+        while self.next + 1 < len(w) and math.dist(p, w[self.next]) < 1e-3:
+            self.next += 1
         d = w[self.next] - p
         return d, math.hypot(d[0], d[1])
 

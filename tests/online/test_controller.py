@@ -1,0 +1,107 @@
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from copi.errors import InvalidArgumentError
+from copi.learning import explore
+from copi.online import ContextController
+
+READINGS = explore(3, 60, seed=11).readings
+
+
+def _by_hand(caps, s, want, reach=math.inf):
+    """The §III chain written out plainly."""
+    node = int(np.argmin(((caps.nodes - s) ** 2).sum(1)))
+    landmark = int(caps.landmarks.node_landmark[node])
+    template = int(caps.reduction.template_of[landmark])
+    g = int(caps.reduction.element[landmark])
+    m_inv = np.linalg.inv(caps.group.matrices[g])
+    ok = caps.policies.passable[template]
+    cand = caps.policies.actions[template] @ m_inv.T
+    if not ok.any():
+        return node, landmark, template, g, None, np.zeros(2)
+    u = np.asarray(want, float) / np.linalg.norm(want)
+    d = int(np.argmax(np.where(ok, cand @ u, -np.inf)))
+    step = 1.0
+    if math.isfinite(reach) and cand[d] @ u * reach > 0:
+        step = min(1.0, cand[d] @ u * reach)
+    return node, landmark, template, g, d, cand[d] * step
+
+
+@settings(max_examples=60, deadline=None)
+@given(i=st.integers(0, len(READINGS) - 1), angle=st.floats(0, 2 * np.pi), reach=st.floats(0.1, 20))
+def test_the_chain_matches_a_plain_rendition(small_caps, i, angle, reach) -> None:
+    caps, _ = small_caps
+    ctl = ContextController(caps)
+    want = [math.cos(angle), math.sin(angle)]
+    action, info = ctl.decide(READINGS[i], want, reach=reach, explain=True)
+    node, landmark, template, g, d, expected = _by_hand(caps, READINGS[i], want, reach)
+    assert (info.node, info.landmark, info.template) == (node, landmark, template)
+    assert info.element == (caps.group.words[g] or "id")
+    assert info.choice == (None if d is None else caps.policies.names[d])
+    np.testing.assert_allclose(action, expected, atol=1e-12)
+    assert len(info.candidates) == len(info.candidate_actions)
+    assert np.linalg.norm(action) <= 1 + 1e-12
+
+
+@settings(max_examples=20, deadline=None)
+@given(seed=st.integers(0, 2**31), guard=st.sampled_from([0.0, 1.0]))
+def test_batched_equals_one_by_one(small_caps, seed, guard) -> None:
+    caps, _ = small_caps
+    rng = np.random.default_rng(seed)
+    rows = READINGS[rng.choice(len(READINGS), 25)]
+    want = rng.normal(size=(25, 2))
+    reach = rng.uniform(0.2, 5, 25)
+    ctl = ContextController(caps, guard=guard)
+    batch, nodes = ctl.decide_batch(rows, want, reach)
+    for b in range(25):
+        a, info = ctl.decide(rows[b], want[b], reach=reach[b], explain=True)
+        np.testing.assert_array_equal(a, batch[b])
+        assert info.node == nodes[b]
+
+
+def test_guard_refuses_a_move_into_a_near_hit(small_caps) -> None:
+    caps, _ = small_caps
+    s = np.full(caps.n_rays, 10.0)
+    s[0] = 0.9  # something right ahead, east
+    free = ContextController(caps)
+    guarded = ContextController(caps, guard=1.0)
+    a_free, info = free.decide(s, [1.0, 0.0], explain=True)
+    a_guard, info_g = guarded.decide(s, [1.0, 0.0], explain=True)
+    if info.choice == "E":
+        assert info_g.choice != "E"
+        assert a_guard[0] < 0.99
+
+
+def test_unfamiliar_readings_are_flagged_and_can_be_learnt(small_caps) -> None:
+    caps, _ = small_caps
+    ctl = ContextController(caps, continual=True)
+    rng = np.random.default_rng(0)
+    # a comb of rays alternately touching and free: no world looks like it
+    odd = np.tile([0.2, 10.0], caps.n_rays // 2) + rng.uniform(0, 0.1, size=(60, caps.n_rays))
+    for s in odd:
+        action, info = ctl.decide(s, [0.0, 1.0], explain=True)
+        assert info.unfamiliar
+    assert ctl.unfamiliar_rate == 1.0
+    assert ctl.n_learnt >= 2
+    _, info = ctl.decide(odd[-1], [0.0, 1.0], explain=True)
+    assert info.node >= len(caps.nodes)  # the reading now has a context of its own
+    familiar = ContextController(caps)
+    familiar.decide(READINGS[5], [1.0, 0.0])
+    assert familiar.unfamiliar_rate in (0.0, 1.0)
+
+
+def test_bad_readings_are_refused(small_caps) -> None:
+    caps, _ = small_caps
+    ctl = ContextController(caps)
+    with pytest.raises(InvalidArgumentError, match=r"must have shape \(32,\) \(as the capabilities\); got \(16,\)"):
+        ctl.decide(np.ones(16), [1.0, 0.0])
+    with pytest.raises(InvalidArgumentError, match="must be finite"):
+        ctl.decide(np.r_[np.nan, np.ones(31)], [1.0, 0.0])
+    with pytest.raises(InvalidArgumentError, match="guard must be"):
+        ContextController(caps, guard=-1)

@@ -156,3 +156,40 @@ def test_learn_inspect_figures(tmp_path: Path, capsys: pytest.CaptureFixture[str
     assert code == 2 and "not a complete .npz archive" in err and "Traceback" not in err
     code, _, err = run(["learn", "-o", str(caps), "--directions", "5"], capsys)
     assert code == 2 and "directions must be 4, 8 or 16" in err
+
+
+def test_evaluate_report_and_bad_inputs(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    caps = tmp_path / "caps.npz"
+    run(["learn", "-o", str(caps), "--worlds", "8", "--steps", "150"], capsys)
+    results = tmp_path / "r.sqlite"
+    code, out, err = run(
+        ["evaluate", str(caps), "-o", str(results), "--worlds", "4", "--max-steps", "200"], capsys
+    )
+    assert code == 0 and "4 episodes" in out, err
+    code, out, _ = run(["report", str(results), "-o", str(tmp_path / "rep")], capsys)
+    assert code == 0 and (tmp_path / "rep" / "report.md").exists()
+    before = results.read_bytes()
+    code, _, err = run(
+        ["evaluate", str(caps), "-o", str(results), "--worlds", "4", "--max-steps", "100"], capsys
+    )
+    assert code == 2 and "different configuration" in err and "Traceback" not in err
+    assert results.read_bytes() == before
+    code, _, err = run(
+        ["evaluate", str(caps), "-o", str(tmp_path / "s.sqlite"), "--worlds", "2",
+         "--scheduler", "tcp://127.0.0.1:9"],
+        capsys,
+    )  # fmt: skip
+    assert code == 2 and "cannot reach the Dask scheduler at tcp://127.0.0.1:9" in err
+    broken = tmp_path / "broken.npz"
+    broken.write_bytes(caps.read_bytes()[:200])
+    code, _, err = run(["evaluate", str(broken), "-o", str(tmp_path / "b.sqlite")], capsys)
+    assert code == 2 and "not a complete .npz archive" in err
+    assert not (tmp_path / "b.sqlite").exists()
+    code, _, err = run(
+        ["evaluate", str(caps), "-o", str(tmp_path / "x.sqlite"), "--strategy", "astar"], capsys
+    )
+    assert code == 2 and "strategy must be 'route' or 'greedy'" in err
+    code, _, err = run(
+        ["report", str(tmp_path / "missing.sqlite"), "-o", str(tmp_path / "q")], capsys
+    )
+    assert code == 2 and "no such results file" in err

@@ -99,7 +99,9 @@ def test_unfamiliar_readings_are_flagged_and_can_be_learnt(small_caps) -> None:
 def test_bad_readings_are_refused(small_caps) -> None:
     caps, _ = small_caps
     ctl = ContextController(caps)
-    with pytest.raises(InvalidArgumentError, match=r"must have shape \(32,\) \(as the capabilities\); got \(16,\)"):
+    with pytest.raises(
+        InvalidArgumentError, match=r"must have shape \(32,\) \(as the capabilities\); got \(16,\)"
+    ):
         ctl.decide(np.ones(16), [1.0, 0.0])
     with pytest.raises(InvalidArgumentError, match="must be finite"):
         ctl.decide(np.r_[np.nan, np.ones(31)], [1.0, 0.0])

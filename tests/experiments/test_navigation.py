@@ -1,0 +1,149 @@
+from __future__ import annotations
+
+import os
+import signal
+import sqlite3
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from copi.experiments import (
+    NavigationConfig,
+    ResultsError,
+    ResultsStore,
+    evaluate,
+    run_episode,
+    write_report,
+)
+from copi.learning import LearnParams, learn
+
+TIMINGS = {"decision_us", "strategy_us"}
+
+
+@pytest.fixture(scope="module")
+def caps_path(tmp_path_factory: pytest.TempPathFactory) -> str:
+    path = tmp_path_factory.mktemp("caps") / "caps.npz"
+    learn(LearnParams(worlds=12, steps=200, seed=1)).save(path)
+    return str(path)
+
+
+def _rows(path: Path) -> list[dict]:
+    with ResultsStore(path) as store:
+        return [{k: v for k, v in r.items() if k not in TIMINGS} for r in store.episodes()]
+
+
+def test_an_episode_depends_on_its_index_only(caps_path: str) -> None:
+    cfg = NavigationConfig(caps_path, worlds=5, max_steps=300).resolved()
+    a = run_episode(cfg, 3)
+    b = run_episode(cfg, 3)
+    assert {k: v for k, v in a.__dict__.items() if k not in TIMINGS} == {
+        k: v for k, v in b.__dict__.items() if k not in TIMINGS
+    }
+    assert a.success == (a.reached and not a.collided)
+    assert a.timed_out == (not a.reached)
+    assert a.path_length <= a.steps + 1e-9  # at most one agent step per time step
+    assert np.isfinite(a.optimal_length)
+    if a.reached:
+        assert a.excess == pytest.approx(a.path_length / a.optimal_length - 1)
+
+
+def test_results_do_not_depend_on_the_workers(caps_path: str, tmp_path: Path) -> None:
+    cfg = NavigationConfig(caps_path, worlds=12, max_steps=300)
+    evaluate(cfg, tmp_path / "one.sqlite", workers=1)
+    evaluate(cfg, tmp_path / "two.sqlite", workers=2)
+    assert _rows(tmp_path / "one.sqlite") == _rows(tmp_path / "two.sqlite")
+    assert len(_rows(tmp_path / "one.sqlite")) == 12
+
+
+def test_dask_local_cluster_gives_the_same_results(caps_path: str, tmp_path: Path) -> None:
+    from distributed import LocalCluster
+
+    cfg = NavigationConfig(caps_path, worlds=6, max_steps=300)
+    evaluate(cfg, tmp_path / "local.sqlite", workers=1)
+    with LocalCluster(
+        n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1",
+        dashboard_address=None, silence_logs=50,
+    ) as cluster:  # fmt: skip
+        evaluate(cfg, tmp_path / "dask.sqlite", scheduler=cluster.scheduler_address)
+    assert _rows(tmp_path / "local.sqlite") == _rows(tmp_path / "dask.sqlite")
+
+
+def test_rerunning_resumes_and_never_duplicates(caps_path: str, tmp_path: Path) -> None:
+    cfg = NavigationConfig(caps_path, worlds=8, max_steps=300)
+    out = tmp_path / "r.sqlite"
+    evaluate(cfg, out)
+    with sqlite3.connect(out) as db:  # lose the last three, as an interruption would
+        db.execute("DELETE FROM episodes WHERE episode >= 5")
+    evaluate(cfg, out)
+    rows = _rows(out)
+    assert [r["episode"] for r in rows] == list(range(8))
+    clean = tmp_path / "clean.sqlite"
+    evaluate(cfg, clean)
+    assert rows == _rows(clean)
+
+
+def test_a_killed_run_resumes_where_it_stopped(caps_path: str, tmp_path: Path) -> None:
+    out = tmp_path / "killed.sqlite"
+    args = [
+        sys.executable, "-m", "copi.cli.main", "evaluate", caps_path, "-o", str(out),
+        "--worlds", "400", "--max-steps", "300",
+    ]  # fmt: skip
+    proc = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.time() + 120
+    n = 0
+    while time.time() < deadline:
+        time.sleep(0.02)
+        if out.exists():
+            try:
+                with sqlite3.connect(out, timeout=1) as db:
+                    n = db.execute("SELECT COUNT(*) FROM episodes").fetchone()[0]
+            except sqlite3.OperationalError:
+                continue
+            if n >= 5:
+                break
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.wait()
+    assert 5 <= n < 400, "the run should have been killed part-way"
+    done = subprocess.run(args, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    rows = _rows(out)
+    assert [r["episode"] for r in rows] == list(range(400))
+    clean = tmp_path / "clean.sqlite"
+    evaluate(NavigationConfig(caps_path, worlds=400, max_steps=300), clean, workers=2)
+    assert rows == _rows(clean)
+
+
+def test_a_different_configuration_is_refused_and_the_file_kept(
+    caps_path: str, tmp_path: Path
+) -> None:
+    out = tmp_path / "r.sqlite"
+    evaluate(NavigationConfig(caps_path, worlds=3, max_steps=300), out)
+    before = out.read_bytes()
+    with pytest.raises(
+        ResultsError, match="different configuration .*max_steps: 300 there, 200 now"
+    ):
+        evaluate(NavigationConfig(caps_path, worlds=3, max_steps=200), out)
+    assert out.read_bytes() == before
+    foreign = tmp_path / "foreign.sqlite"
+    with sqlite3.connect(foreign) as db:
+        db.execute("CREATE TABLE t (x)")
+    with pytest.raises(ResultsError, match="not a copi results store"):
+        ResultsStore(foreign)
+    (tmp_path / "text.sqlite").write_text("hello")
+    with pytest.raises(ResultsError, match="not a copi results file"):
+        ResultsStore(tmp_path / "text.sqlite")
+
+
+def test_report_reads_everything_from_the_store(caps_path: str, tmp_path: Path) -> None:
+    out = tmp_path / "r.sqlite"
+    evaluate(NavigationConfig(caps_path, worlds=6, max_steps=300, method="a", record=4), out)
+    evaluate(NavigationConfig(caps_path, worlds=6, max_steps=300, method="b", guard=1.0), out)
+    report = write_report([out], tmp_path / "report")
+    text = report.read_text()
+    assert "| a | 6 |" in text and "| b | 6 |" in text
+    names = sorted(p.name for p in (tmp_path / "report").iterdir())
+    assert "fig4_excess.png" in names and "fig3_a.png" in names

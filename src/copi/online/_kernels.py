@@ -32,7 +32,10 @@ def _nearest(x, nodes):  # type: ignore[no-untyped-def]
     return best, bd
 
 
-@njit(cache=True)
+# fastmath on the callers too: numba inlines _nearest at the IR level, where the
+# caller's flags are the ones that count (without them the distance sums do not
+# vectorise and a decision takes twice as long).
+@njit(cache=True, fastmath=FAST)
 def decide(  # type: ignore[no-untyped-def]
     s, nodes, cand, ok, wx, wy, reach, guard, cos, sin, max_range, out
 ):
@@ -117,7 +120,7 @@ def decide(  # type: ignore[no-untyped-def]
     out[4] = best
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=FAST)
 def decide_batch(  # type: ignore[no-untyped-def]
     s, nodes, cand, ok, want, reach, guard, cos, sin, max_range, out
 ):

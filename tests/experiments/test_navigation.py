@@ -90,7 +90,7 @@ def test_a_killed_run_resumes_where_it_stopped(caps_path: str, tmp_path: Path) -
     out = tmp_path / "killed.sqlite"
     args = [
         sys.executable, "-m", "copi.cli.main", "evaluate", caps_path, "-o", str(out),
-        "--worlds", "400", "--max-steps", "300",
+        "--worlds", "150", "--max-steps", "300",
     ]  # fmt: skip
     proc = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     deadline = time.time() + 120
@@ -107,13 +107,13 @@ def test_a_killed_run_resumes_where_it_stopped(caps_path: str, tmp_path: Path) -
                 break
     os.kill(proc.pid, signal.SIGKILL)
     proc.wait()
-    assert 5 <= n < 400, "the run should have been killed part-way"
+    assert 5 <= n < 150, "the run should have been killed part-way"
     done = subprocess.run(args, capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     rows = _rows(out)
-    assert [r["episode"] for r in rows] == list(range(400))
+    assert [r["episode"] for r in rows] == list(range(150))
     clean = tmp_path / "clean.sqlite"
-    evaluate(NavigationConfig(caps_path, worlds=400, max_steps=300), clean, workers=2)
+    evaluate(NavigationConfig(caps_path, worlds=150, max_steps=300), clean, workers=2)
     assert rows == _rows(clean)
 
 

@@ -47,7 +47,9 @@ class NavigationConfig:
     agent_radius: float = 0.3
     """Radius of the disc agent."""
     guard: float = 0.0
-    """The controller's guard (0: the paper's chain; see ContextController)."""
+    """The controller's guard (0: the paper's chain; see ContextController). With the
+    route strategy, which knows the static map, the guard is told what the map alone
+    would show, so that only moving obstacles count as hazards."""
     continual: bool = False
     """Grow contexts for unfamiliar readings online."""
     record: int = 8
@@ -150,6 +152,7 @@ def run_episode(config: NavigationConfig, k: int) -> EpisodeResult:
     except CopiError:
         optimal = math.nan
     controller = ContextController(caps, guard=config.guard, continual=config.continual)
+    knows_map = config.guard > 0 and config.strategy == "route"
     strategy = make_strategy(config.strategy)
     strategy.reset(world, start, sim.goal, config.agent_radius)
     length = 0.0
@@ -164,8 +167,9 @@ def run_episode(config: NavigationConfig, k: int) -> EpisodeResult:
         steps += 1
         t0 = clock()
         desired, reach = strategy.aim(sim.position)
+        static = sensor.scan(world, sim.position) if knows_map else None
         t1 = clock()
-        action, _ = controller.decide(sim.ranges, desired, reach=reach)
+        action, _ = controller.decide(sim.ranges, desired, reach=reach, static=static)
         t2 = clock()
         t_aim += t1 - t0
         t_decide += t2 - t1
@@ -230,7 +234,7 @@ def evaluate(
     after an interruption finishes the missing ones only. Each finished episode is
     committed at once.
     """
-    from copi.experiments.executor import make_executor
+    from copi.experiments.executor import InlineExecutor, make_executor
     from copi.experiments.store import ResultsStore
 
     config = config.resolved()
@@ -244,18 +248,27 @@ def evaluate(
             progress(finished, total)
         if not todo:
             return run_id
+        def store_all(results: list[EpisodeResult]) -> None:
+            nonlocal finished
+            for result in results:
+                store.add(run_id, "navigation", config.method, result)
+                finished += 1
+            if progress is not None:
+                progress(finished, total)
+
         with make_executor(workers, scheduler) as pool:
-            n_workers = 1 if scheduler is None and workers == 1 else max(workers, 2)
+            if isinstance(pool, InlineExecutor):
+                # In this process: run and commit one episode at a time.
+                for k in todo:
+                    store_all([run_episode(config, k)])
+                return run_id
+            n_workers = workers if scheduler is None else 4
             size = max(1, min(16, len(todo) // (4 * n_workers)))
             chunks = [todo[i : i + size] for i in range(0, len(todo), size)]
             futures = [pool.submit(run_episodes, config, chunk) for chunk in chunks]
             try:
                 for fut in as_completed(futures):
-                    for result in fut.result():
-                        store.add(run_id, "navigation", config.method, result)
-                        finished += 1
-                    if progress is not None:
-                        progress(finished, total)
+                    store_all(fut.result())
             except BaseException:
                 for f in futures:
                     f.cancel()

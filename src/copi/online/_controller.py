@@ -72,10 +72,11 @@ class ContextController:
         Learn unfamiliar contexts as they come.
     guard : float
         0 (the paper's chain, the default) or a clearance: a candidate policy is then kept
-        only if the live reading's hit points stay at least ``guard`` from the path its
-        step sweeps, i.e. the template's passability is checked against the context it
-        is instantiated in (if no candidate passes, the one with the most room is
-        taken). Typically the agent radius plus an obstacle's step plus a margin.
+        only if, after its step, the live reading's hit points are all at least ``guard``
+        away (and its path grazes none closer than half of that), i.e. the template's
+        passability is checked against the context it is instantiated in; if no
+        candidate passes, the one leaving the most room is taken. Typically the agent
+        radius plus an obstacle's step plus a margin.
     """
 
     def __init__(
@@ -106,6 +107,7 @@ class ContextController:
         self._cos = np.cos(angles)
         self._sin = np.sin(angles)
         self.max_range = float(caps.params.get("max_range", 10.0))
+        self._no_static = np.full(self.n_rays, np.inf)  # no map: every hit counts
         self._out = np.empty(5)
         self._nodes = np.ascontiguousarray(caps.nodes, dtype=np.float64)
         self._landmark = caps.landmarks.node_landmark
@@ -148,7 +150,13 @@ class ContextController:
         return int(self._idx[0]), math.sqrt(self._d2[0])
 
     def decide(
-        self, ranges: Any, desired: Any, *, reach: float = math.inf, explain: bool = False
+        self,
+        ranges: Any,
+        desired: Any,
+        *,
+        reach: float = math.inf,
+        static: Any = None,
+        explain: bool = False,
     ) -> tuple[NDArray[np.float64], Decision | None]:
         """The velocity for one reading, given the global strategy's desired direction.
 
@@ -160,6 +168,9 @@ class ContextController:
         reach : float
             How far the strategy's aim lies along ``desired``: the step is cut so as not
             to go past it (1 at most).
+        static : array_like of shape (n_rays,), optional
+            The reading the static map alone would give here (known to a strategy that
+            knows the map); with a guard, only hits it does not explain are hazards.
         explain : bool
             Also return a :class:`Decision` saying how the action came about.
         """
@@ -171,8 +182,9 @@ class ContextController:
         want = np.asarray(desired, dtype=np.float64)
         out = self._out
         nodes, cand, ok = self._nodes, self._cand, self._ok
+        st = self._no_static if static is None else np.asarray(static, dtype=np.float64)
         _kernels.decide(
-            s, nodes, cand, ok, want[0], want[1], float(reach), self.guard,
+            s, st, nodes, cand, ok, want[0], want[1], float(reach), self.guard,
             self._cos, self._sin, self.max_range, out,
         )  # fmt: skip
         if out[2] < 0:
@@ -185,7 +197,7 @@ class ContextController:
             if self.continual:
                 nodes, cand, ok = self._learn_unfamiliar(s)
                 _kernels.decide(
-                    s, nodes, cand, ok, want[0], want[1], float(reach), self.guard,
+                    s, st, nodes, cand, ok, want[0], want[1], float(reach), self.guard,
                     self._cos, self._sin, self.max_range, out,
                 )  # fmt: skip
         action = out[:2].copy()
@@ -210,7 +222,7 @@ class ContextController:
         )
 
     def decide_batch(
-        self, ranges: Any, desired: Any, reach: Any = None
+        self, ranges: Any, desired: Any, reach: Any = None, static: Any = None
     ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
         """Velocities for many agents at once (same results as :meth:`decide` row by
         row); returns (actions (b, 2), nodes (b,))."""
@@ -224,9 +236,14 @@ class ContextController:
             raise InvalidArgumentError(f"desired must have shape ({len(s)}, 2); got {want.shape}")
         r = np.full(len(s), math.inf) if reach is None else np.asarray(reach, dtype=np.float64)
         out = np.empty((len(s), 5))
+        st = (
+            np.broadcast_to(self._no_static, s.shape)
+            if static is None
+            else np.asarray(static, dtype=np.float64).reshape(s.shape)
+        )
         _kernels.decide_batch(
-            np.ascontiguousarray(s), self._nodes, self._cand, self._ok, want, r, self.guard,
-            self._cos, self._sin, self.max_range, out,
+            np.ascontiguousarray(s), np.ascontiguousarray(st), self._nodes, self._cand,
+            self._ok, want, r, self.guard, self._cos, self._sin, self.max_range, out,
         )  # fmt: skip
         if (out[:, 2] < 0).any():
             raise InvalidArgumentError("readings must be finite")

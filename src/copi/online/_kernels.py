@@ -37,16 +37,19 @@ def _nearest(x, nodes):  # type: ignore[no-untyped-def]
 # vectorise and a decision takes twice as long).
 @njit(cache=True, fastmath=FAST)
 def decide(  # type: ignore[no-untyped-def]
-    s, nodes, cand, ok, wx, wy, reach, guard, cos, sin, max_range, out
+    s, static, nodes, cand, ok, wx, wy, reach, guard, cos, sin, max_range, out
 ):
     """One decision for reading ``s`` and desired direction (wx, wy).
 
     Writes out = (ax, ay, node, d2, choice); choice -1: no candidate; node -1: the
     reading is not finite (nothing else is computed).
 
-    With ``guard`` > 0, a candidate is kept only if the reading's hit points stay at
-    least ``guard`` from the path its step would sweep (the template's passability
-    checked against the live reading); if none is left, the least bad one is taken.
+    With ``guard`` > 0, a candidate is kept only if, after its step, every hit point of
+    the reading is at least ``guard`` away, and its path passes no hit point closer than
+    half of that (the template's passability checked against the live reading); if none
+    is left, the one leaving the most room is taken. Rays whose reading ``static``
+    explains (what the static map alone would show, when known) are not hazards: walls
+    stop the agent, they do not collide with it.
     """
     for i in range(s.shape[0]):
         if not math.isfinite(s[i]):
@@ -80,12 +83,23 @@ def decide(  # type: ignore[no-untyped-def]
                 along = score * reach
                 if along > 0.0:
                     step = min(1.0, along)
-            clear = np.inf
+            # Room after the step (to every hit point of the live reading), and room along
+            # it (the centre's path must not graze a hit).
+            end = np.inf
+            sweep = np.inf
+            ex = step * ax
+            ey = step * ay
             for i in range(s.shape[0]):
-                if s[i] >= max_range:
+                # only hits the static map does not explain (moving obstacles) count
+                if s[i] >= max_range or s[i] >= static[i] - 0.05:
                     continue
                 px = s[i] * cos[i]
                 py = s[i] * sin[i]
+                qx = px - ex
+                qy = py - ey
+                de = math.sqrt(qx * qx + qy * qy)
+                if de < end:
+                    end = de
                 t = px * ax + py * ay
                 if t < 0.0:
                     t = 0.0
@@ -94,11 +108,11 @@ def decide(  # type: ignore[no-untyped-def]
                 dx = px - t * ax
                 dy = py - t * ay
                 dd = math.sqrt(dx * dx + dy * dy)
-                if dd < clear:
-                    clear = dd
-            if clear < guard:
-                if clear > fallback_clear:
-                    fallback_clear = clear
+                if dd < sweep:
+                    sweep = dd
+            if end < guard or sweep < 0.5 * guard:
+                if end > fallback_clear:
+                    fallback_clear = end
                     fallback = d
                 continue
         if score > best_score:
@@ -122,12 +136,13 @@ def decide(  # type: ignore[no-untyped-def]
 
 @njit(cache=True, fastmath=FAST)
 def decide_batch(  # type: ignore[no-untyped-def]
-    s, nodes, cand, ok, want, reach, guard, cos, sin, max_range, out
+    s, static, nodes, cand, ok, want, reach, guard, cos, sin, max_range, out
 ):
     """:func:`decide` for each row; out has shape (b, 5)."""
     for b in range(s.shape[0]):
         decide(
             s[b],
+            static[b],
             nodes,
             cand,
             ok,

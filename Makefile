@@ -21,11 +21,13 @@ $(STAMP): pyproject.toml
 	$(BIN)/python -m pip install --quiet -e '.[dev]'
 	touch $(STAMP)
 
+# The paper's Experiment 1 end to end (learn, 1549 dynamic worlds in two modes, report),
+# then the figures of the capabilities and a few worlds with an animation.
 run: install
-	$(BIN)/copi world sample --seed 0 -n 4 -o $(RESULTS)/worlds.json
-	$(BIN)/copi world show $(RESULTS)/worlds.json -o $(RESULTS) --gif
-	$(BIN)/copi learn -o $(RESULTS)/capabilities.npz
-	$(BIN)/copi figures $(RESULTS)/capabilities.npz -o $(RESULTS)/figures
+	$(BIN)/copi reproduce -o $(RESULTS)
+	$(BIN)/copi figures $(RESULTS)/capabilities-faithful.npz -o $(RESULTS)/figures
+	$(BIN)/copi world sample --seed 0 -n 4 -o $(RESULTS)/worlds/worlds.json
+	$(BIN)/copi world show $(RESULTS)/worlds/worlds.json -o $(RESULTS)/worlds --gif
 
 lint: install
 	$(BIN)/ruff check src tests benchmarks

@@ -7,7 +7,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from benchmarks import bench_learning, bench_planning, bench_world  # noqa: E402
+from benchmarks import bench_learning, bench_online, bench_planning, bench_world  # noqa: E402
 
 
 def main() -> int:
@@ -15,6 +15,7 @@ def main() -> int:
         "world": bench_world.main(),
         "planning": bench_planning.main(),
         "learning": bench_learning.main(),
+        "online": bench_online.main(),
     }
     missed = [name for name, ok in results.items() if not ok]
     print("all goals met" if not missed else f"goals missed in: {', '.join(missed)}")

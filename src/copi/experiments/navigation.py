@@ -248,6 +248,7 @@ def evaluate(
             progress(finished, total)
         if not todo:
             return run_id
+
         def store_all(results: list[EpisodeResult]) -> None:
             nonlocal finished
             for result in results:

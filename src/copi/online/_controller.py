@@ -110,6 +110,8 @@ class ContextController:
         self._no_static = np.full(self.n_rays, np.inf)  # no map: every hit counts
         self._out = np.empty(5)
         self._nodes = np.ascontiguousarray(caps.nodes, dtype=np.float64)
+        self._nodes32 = self._nodes.astype(np.float32)
+        self._norms32 = (self._nodes32 * self._nodes32).sum(1)
         self._landmark = caps.landmarks.node_landmark
         self._template = caps.node_template
         self._element = caps.node_element
@@ -241,9 +243,15 @@ class ContextController:
             if static is None
             else np.asarray(static, dtype=np.float64).reshape(s.shape)
         )
+        s = np.ascontiguousarray(s)
+        # Screen the nearest-node search with one float32 matrix product (BLAS); the
+        # kernel then measures the few close nodes exactly.
+        s32 = s.astype(np.float32)
+        screen = self._norms32[None, :] - 2.0 * (s32 @ self._nodes32.T)
+        screen += (s32 * s32).sum(1)[:, None]
         _kernels.decide_batch(
-            np.ascontiguousarray(s), np.ascontiguousarray(st), self._nodes, self._cand,
-            self._ok, want, r, self.guard, self._cos, self._sin, self.max_range, out,
+            s, np.ascontiguousarray(st), self._nodes, screen, self._cand, self._ok, want, r,
+            self.guard, self._cos, self._sin, self.max_range, out,
         )  # fmt: skip
         if (out[:, 2] < 0).any():
             raise InvalidArgumentError("readings must be finite")

@@ -17,17 +17,24 @@ from copi.learning._gng_kernels import FAST
 
 
 @njit(cache=True, inline="always", fastmath=FAST)
+def _exact(x, nodes, i):  # type: ignore[no-untyped-def]
+    """Squared distance from x to node i (the one formula every path uses)."""
+    e = 0.0
+    for j in range(x.shape[0]):
+        diff = x[j] - nodes[i, j]
+        e += diff * diff
+    return e
+
+
+@njit(cache=True, inline="always", fastmath=FAST)
 def _nearest(x, nodes):  # type: ignore[no-untyped-def]
+    """Nearest node: argmin of :func:`_exact`, ties to the lower index."""
     best = -1
     bd = np.inf
-    d = x.shape[0]
     for i in range(nodes.shape[0]):
-        acc = 0.0
-        for j in range(d):
-            diff = x[j] - nodes[i, j]
-            acc += diff * diff
-        if acc < bd:
-            bd = acc
+        e = _exact(x, nodes, i)
+        if e < bd:
+            bd = e
             best = i
     return best, bd
 
@@ -38,6 +45,19 @@ def _nearest(x, nodes):  # type: ignore[no-untyped-def]
 @njit(cache=True, fastmath=FAST)
 def decide(  # type: ignore[no-untyped-def]
     s, static, nodes, cand, ok, wx, wy, reach, guard, cos, sin, max_range, out
+):
+    """One decision for reading ``s``: :func:`_nearest`, then :func:`_choose`."""
+    for i in range(s.shape[0]):
+        if not math.isfinite(s[i]):
+            out[2] = -1.0
+            return
+    node, d2 = _nearest(s, nodes)
+    _choose(s, static, node, d2, cand, ok, wx, wy, reach, guard, cos, sin, max_range, out)
+
+
+@njit(cache=True, inline="always", fastmath=FAST)
+def _choose(  # type: ignore[no-untyped-def]
+    s, static, node, d2, cand, ok, wx, wy, reach, guard, cos, sin, max_range, out
 ):
     """One decision for reading ``s`` and desired direction (wx, wy).
 
@@ -51,11 +71,6 @@ def decide(  # type: ignore[no-untyped-def]
     explains (what the static map alone would show, when known) are not hazards: walls
     stop the agent, they do not collide with it.
     """
-    for i in range(s.shape[0]):
-        if not math.isfinite(s[i]):
-            out[2] = -1.0
-            return
-    node, d2 = _nearest(s, nodes)
     out[2] = node
     out[3] = d2
     norm = math.sqrt(wx * wx + wy * wy)
@@ -136,22 +151,36 @@ def decide(  # type: ignore[no-untyped-def]
 
 @njit(cache=True, fastmath=FAST)
 def decide_batch(  # type: ignore[no-untyped-def]
-    s, static, nodes, cand, ok, want, reach, guard, cos, sin, max_range, out
+    s, static, nodes, screen, cand, ok, want, reach, guard, cos, sin, max_range, out
 ):
-    """:func:`decide` for each row; out has shape (b, 5)."""
+    """:func:`decide` for each row, out of shape (b, 5), with the nearest-node search
+    screened by ``screen`` (b, n): approximate squared distances (a float32 matrix
+    product). Every node within a wide margin of a row's screened minimum is measured
+    with :func:`_exact`, so the choice is the one :func:`_nearest` makes."""
     for b in range(s.shape[0]):
-        decide(
-            s[b],
-            static[b],
-            nodes,
-            cand,
-            ok,
-            want[b, 0],
-            want[b, 1],
-            reach[b],
-            guard,
-            cos,
-            sin,
-            max_range,
-            out[b],
-        )
+        x = s[b]
+        finite = True
+        for i in range(x.shape[0]):
+            if not math.isfinite(x[i]):
+                finite = False
+        if not finite:
+            out[b, 2] = -1.0
+            continue
+        row = screen[b]
+        m = np.inf
+        for i in range(row.shape[0]):
+            if row[i] < m:
+                m = row[i]
+        cut = m + 1e-3 * abs(m) + 1e-2
+        node = -1
+        bd = np.inf
+        for i in range(row.shape[0]):
+            if row[i] <= cut:
+                e = _exact(x, nodes, i)
+                if e < bd:
+                    bd = e
+                    node = i
+        _choose(
+            x, static[b], node, bd, cand, ok, want[b, 0], want[b, 1], reach[b], guard,
+            cos, sin, max_range, out[b],
+        )  # fmt: skip

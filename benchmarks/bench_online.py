@@ -1,0 +1,82 @@
+"""Speed of online policy instantiation and of Experiment 1.
+
+Goals (issue: online policy instantiation and Experiment 1):
+- one decision (scan excluded) <= 10 µs for one agent, <= 3 µs per agent batched;
+- 2 workers >= 1.8x one worker on the same episodes (the full `copi reproduce` at
+  paper scale, <= 120 s on 2 cores, is timed by `make run`).
+"""
+
+from __future__ import annotations
+
+import tempfile
+import time
+import timeit
+from pathlib import Path
+
+import numpy as np
+
+from benchmarks._timing import Timing, report
+from copi.experiments import NavigationConfig, evaluate
+from copi.learning import LearnParams, explore, learn
+from copi.online import ContextController
+
+
+def main() -> bool:
+    tmp = Path(tempfile.mkdtemp())
+    caps = learn(LearnParams(directions=16))
+    caps_path = caps.save(tmp / "caps.npz")
+    readings = explore(4, 500, seed=9).readings
+    rng = np.random.default_rng(0)
+    want = rng.normal(size=(len(readings), 2))
+    plain = ContextController(caps)
+    guarded = ContextController(caps, guard=0.9)
+    plain.decide(readings[0], want[0])
+    guarded.decide(readings[0], want[0])
+    batch = readings[:1000]
+    plain.decide_batch(batch, want[:1000])
+
+    def single(ctl: ContextController) -> float:
+        i = iter(range(10**9))
+        return (
+            min(
+                timeit.repeat(
+                    lambda: ctl.decide(readings[(k := next(i) % 2000)], want[k]),
+                    number=20000,
+                    repeat=5,
+                )
+            )
+            / 20000
+        )
+
+    rows = [
+        Timing("decide, one agent", single(plain)),
+        Timing("decide, one agent, guard 0.9", single(guarded)),
+        Timing(
+            "decide_batch, 1000 agents",
+            min(timeit.repeat(lambda: plain.decide_batch(batch, want[:1000]), number=20, repeat=5))
+            / 20,
+            per=1000,
+        ),
+    ]
+    ok = report(
+        "online decision (scan excluded)",
+        rows,
+        None,
+        {rows[0].name: 10e-6, rows[1].name: 10e-6, rows[2].name: 3e-6},
+    )
+    cfg = NavigationConfig(str(caps_path), worlds=400, method="bench", guard=0.9)
+    walls = {}
+    for workers in (1, 2):
+        t0 = time.perf_counter()
+        evaluate(cfg, tmp / f"w{workers}.sqlite", workers=workers)
+        walls[workers] = time.perf_counter() - t0
+    speedup = walls[1] / walls[2]
+    print(
+        f"Experiment 1, 400 episodes: 1 worker {walls[1]:.1f} s, 2 workers {walls[2]:.1f} s, "
+        f"speed-up {speedup:.2f}x (goal >= 1.8x)"
+    )
+    return ok and speedup >= 1.8
+
+
+if __name__ == "__main__":
+    raise SystemExit(0 if main() else 1)

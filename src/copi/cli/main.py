@@ -408,6 +408,54 @@ def _check_sensor(capabilities: Path, world_file: Path | None) -> None:
     del world_file
 
 
+@app.command("pursuit")
+def pursuit_command(
+    capabilities: Annotated[Path, typer.Argument(help="Capabilities file (.npz).")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="Results file (SQLite).")],
+    games: Annotated[int, typer.Option("--games", min=1, help="Games to play.")] = 100,
+    dynamic: Annotated[
+        bool, typer.Option("--dynamic/--static", help="With or without moving obstacles.")
+    ] = True,
+    evader: Annotated[
+        str, typer.Option("--evader", help="capability (through the capabilities) or game.")
+    ] = "capability",
+    seed: Annotated[int, typer.Option("--seed", min=0, help="Seed of the games.")] = 0,
+    horizon: Annotated[int, typer.Option("--horizon", min=1, help="Steps to survive.")] = 300,
+    workers: Annotated[int, typer.Option("--workers", min=1, help="Local processes.")] = 1,
+    scheduler: Annotated[
+        str | None, typer.Option("--scheduler", help="Dask scheduler tcp://HOST:PORT instead.")
+    ] = None,
+) -> None:
+    """Experiment 2 (paper §IV, Fig. 5): the homicidal chauffeur. A faster car with a
+    turn radius chases the agent; the agent plays the game's strategy through its
+    capabilities (or, with --evader game, directly). Resumable, like evaluate."""
+    from copi.experiments.pursuit import PursuitConfig, pursue
+    from copi.experiments.report import summarize_games
+    from copi.experiments.store import ResultsStore
+
+    config = PursuitConfig(
+        capabilities=str(capabilities), evader=evader, dynamic=dynamic, games=games,
+        seed=seed, horizon=horizon,
+    )  # fmt: skip
+    output.parent.mkdir(parents=True, exist_ok=True)
+    with progress() as bar:
+        task = bar.add_task(f"{config.method}: games", total=games)
+        run_id = pursue(
+            config,
+            output,
+            workers=workers,
+            scheduler=scheduler,
+            progress=lambda done, total: bar.update(task, completed=done),
+        )
+    with ResultsStore(output) as store:
+        s = summarize_games(store.games(run_id))
+    out.print(
+        f"{output}: {config.method}: {s['games']} games, capture {100 * s['capture']:.1f} %, "
+        f"mean survival {s['survival_mean']:.1f} steps, games with contact "
+        f"{100 * s['contact_games']:.1f} %"
+    )
+
+
 @app.command("report")
 def report_command(
     results: Annotated[list[Path], typer.Argument(help="Results files (SQLite).")],
@@ -433,11 +481,14 @@ def reproduce_command(
     workers: Annotated[int, typer.Option("--workers", min=1, help="Local processes.")] = 2,
     seed: Annotated[int, typer.Option("--seed", min=0, help="Seed of learning and episodes.")] = 0,
 ) -> None:
-    """The paper's Experiment 1 end to end: learn capabilities (100 worlds x 300 steps),
-    evaluate on 1549 dynamic worlds in the faithful mode (4 directions, the paper's chain)
-    and the extended mode (16 directions, candidates checked against the live reading
-    with a guard of 0.9 = agent radius + an obstacle's step), and write the report."""
+    """The paper's experiments end to end: learn capabilities (100 worlds x 300 steps),
+    Experiment 1 on 1549 dynamic worlds in the faithful mode (4 directions, the paper's
+    chain) and the extended mode (16 directions, candidates checked against the live
+    reading with a guard of 0.9 = agent radius + an obstacle's step), Experiment 2 (200
+    homicidal-chauffeur games, stationary and dynamic, capability and game evaders), and
+    the report."""
     from copi.experiments.navigation import NavigationConfig, evaluate
+    from copi.experiments.pursuit import PursuitConfig, pursue
     from copi.experiments.report import write_report
     from copi.learning import LearnParams, learn
 
@@ -461,8 +512,24 @@ def reproduce_command(
                 capabilities=str(caps_path), method=name, worlds=episodes, seed=seed, guard=guard
             )
             evaluate(config, results, workers=workers, progress=advance)
+        caps_path = output / "capabilities-extended.npz"
+        for kind in ("capability", "game"):
+            for dynamic in (False, True):
+                game_cfg = PursuitConfig(
+                    capabilities=str(caps_path), evader=kind, dynamic=dynamic,
+                    games=20 if quick else 200, seed=seed,
+                )  # fmt: skip
+                game_task = bar.add_task(f"pursuit ({game_cfg.method})", total=game_cfg.games)
+
+                def advance_games(done: int, total: int, task: Any = game_task) -> None:
+                    bar.update(task, completed=done)
+
+                pursue(game_cfg, results, workers=workers, progress=advance_games)
     report = write_report([str(results)], output)
-    out.print(report.read_text(encoding="utf-8").split("Runs:")[0])
+    text = report.read_text(encoding="utf-8")
+    out.print(text.split("Runs:")[0])
+    if "# Experiment 2" in text:
+        out.print("# Experiment 2" + text.split("# Experiment 2")[1].split("![")[0])
     out.print(str(report))
 
 

@@ -14,7 +14,7 @@ from copi.experiments.figures import _figure
 from copi.experiments.store import ResultsStore
 from copi.world import World, draw_world
 
-__all__ = ["summarize", "write_report"]
+__all__ = ["summarize", "summarize_games", "write_report"]
 
 SUMMARY_COLUMNS = [
     ("method", "method"),
@@ -133,6 +133,64 @@ def _fig4(excess: dict[str, np.ndarray], out: Path) -> Path:
     return target
 
 
+def summarize_games(rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """Summary of one Experiment 2 method's games."""
+    n = len(rows)
+    if n == 0:
+        return {"games": 0}
+    survival = np.array([r["survival"] for r in rows], dtype=float)
+    return {
+        "games": n,
+        "capture": float(np.mean([r["captured"] for r in rows])),
+        "survival_mean": float(survival.mean()),
+        "survival_median": float(np.median(survival)),
+        "contact_games": float(np.mean([r["contacts"] > 0 for r in rows])),
+        "contacts_per_100": float(100 * sum(r["contacts"] for r in rows) / survival.sum()),
+    }
+
+
+def _fig5(runs: dict[str, list[dict[str, Any]]], out: Path) -> Path | None:
+    """Three games, the stationary world above and the dynamic one below: the car's path
+    in red, the evader's in blue (the paper's Fig. 5)."""
+    rows = [
+        ("static", runs.get("capability-static", [])),
+        ("dynamic", runs.get("capability-dynamic", [])),
+    ]
+    rows = [(name, t[:3]) for name, t in rows if t]
+    if not rows:
+        return None
+    cols = max(len(t) for _, t in rows)
+    fig = _figure(3.4 * cols, 3.4 * len(rows))
+    for r, (name, trajs) in enumerate(rows):
+        for c, t in enumerate(trajs):
+            ax = fig.add_subplot(len(rows), cols, r * cols + c + 1)
+            world = World.from_dict(t["world"])
+            traces = np.asarray(t["traces"])
+            draw_world(
+                ax,
+                world,
+                centers=traces[-1] if traces.size else None,
+                radii=t["radii"] if traces.size else None,
+                traces=traces if traces.size else None,
+                title=f"({'i' if name == 'static' else 'ii'}) game {t['episode']}"
+                + (" — captured" if t["captured"] else " — escaped"),
+            )
+            car = np.asarray(t["pursuer"])
+            ev = np.asarray(t["evader"])
+            ax.plot(car[:, 0], car[:, 1], color="#d62728", lw=1.2)
+            ax.plot(ev[:, 0], ev[:, 1], color="#1f4e99", lw=1.2)
+            ax.plot(*car[0], "o", color="#d62728", ms=4)
+            ax.plot(*ev[0], "o", color="#1f4e99", ms=4)
+    fig.suptitle(
+        "Fig. 5 — pursuer (red) and capability evader (blue): (i) stationary, (ii) dynamic",
+        fontsize=9,
+    )
+    fig.tight_layout()
+    target = out / "fig5_pursuit.png"
+    fig.savefig(target)
+    return target
+
+
 def _slug(s: str) -> str:
     return "".join(c if c.isalnum() else "_" for c in s).strip("_").lower() or "run"
 
@@ -169,9 +227,55 @@ def write_report(results: list[str | os.PathLike[str]], directory: str | os.Path
                 fig = _fig3(store.trajectories(run["run_id"], label), out, label)
                 if fig is not None:
                     figures.append(fig)
-    if not summaries:
-        raise FileNotFoundError(f"no Experiment 1 runs in {', '.join(map(str, results))}")
-    figures.append(_fig4(excess, out))
+    games: list[dict[str, Any]] = []
+    game_traj: dict[str, list[dict[str, Any]]] = {}
+    for path in results:
+        with ResultsStore(path) as store:
+            for run in store.runs():
+                if run["experiment"] != "pursuit":
+                    continue
+                g = summarize_games(store.games(run["run_id"]))
+                g["method"] = run["method"]
+                games.append(g)
+                game_traj[run["method"]] = store.trajectories(run["run_id"], run["method"])
+    if not summaries and not games:
+        raise FileNotFoundError(f"no experiment runs in {', '.join(map(str, results))}")
+    if summaries:
+        figures.append(_fig4(excess, out))
+    fig5 = _fig5(game_traj, out)
+    lines = []
+    if summaries:
+        lines += _experiment1_lines(summaries, runs_info, figures)
+    if games:
+        lines += [
+            "# Experiment 2 — the homicidal chauffeur",
+            "",
+            "The evader plays the game's strategy; the capability evader instantiates it "
+            "through the learnt capabilities (walls and moving obstacles avoided), the game "
+            "evader uses it as its velocity. Survival in time steps (the horizon when not "
+            "captured).",
+            "",
+            "| method | games | capture | mean survival | median survival "
+            "| games with contact | contacts / 100 steps |",
+            "|---|---|---|---|---|---|---|",
+        ]
+        for g in games:
+            lines.append(
+                f"| {g['method']} | {g['games']} | {100 * g['capture']:.1f} % | "
+                f"{g['survival_mean']:.1f} | {g['survival_median']:.1f} | "
+                f"{100 * g['contact_games']:.1f} % | {g['contacts_per_100']:.2f} |"
+            )
+        lines.append("")
+        if fig5 is not None:
+            lines.append(f"![{fig5.stem}]({fig5.name})")
+    report = out / "report.md"
+    report.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return report
+
+
+def _experiment1_lines(
+    summaries: list[dict[str, Any]], runs_info: list[str], figures: list[Path]
+) -> list[str]:
     lines = [
         "# Experiment 1 — reaching goals in dynamic worlds",
         "",
@@ -186,6 +290,5 @@ def write_report(results: list[str | os.PathLike[str]], directory: str | os.Path
         lines.append("| " + " | ".join(_fmt(k, s.get(k)) for k, _ in SUMMARY_COLUMNS) + " |")
     lines += ["", "Runs:", *runs_info, ""]
     lines += [f"![{f.stem}]({f.name})" for f in figures]
-    report = out / "report.md"
-    report.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    return report
+    lines.append("")
+    return lines

@@ -1,7 +1,8 @@
 """The results store: one SQLite file per run (DESIGN.md, "Results store").
 
 Table ``runs`` records each run's parameters and versions; ``episodes`` holds one row per
-(run, method, episode), inserted and committed as each episode ends, so that an
+(run, method, episode), inserted and committed as each episode ends (``games``
+likewise for Experiment 2), so that an
 interrupted run (Ctrl-C, kill -9) resumes where it stopped: SQLite's transactions make
 each row all-or-nothing, and the primary key makes a row impossible to write twice.
 ``trajectories`` keeps the paths of a few episodes for the figures, as JSON.
@@ -55,6 +56,23 @@ CREATE TABLE IF NOT EXISTS episodes (
     no_policy INTEGER,
     PRIMARY KEY (run_id, method, episode)
 );
+CREATE TABLE IF NOT EXISTS games (
+    run_id TEXT NOT NULL,
+    experiment TEXT NOT NULL,
+    method TEXT NOT NULL,
+    world TEXT NOT NULL,
+    game INTEGER NOT NULL,
+    seed INTEGER NOT NULL,
+    dynamic INTEGER NOT NULL,
+    captured INTEGER NOT NULL,
+    capture_time REAL,
+    survival REAL NOT NULL,
+    contacts INTEGER NOT NULL,
+    closest REAL,
+    gamma REAL NOT NULL,
+    beta REAL NOT NULL,
+    PRIMARY KEY (run_id, method, game)
+);
 CREATE TABLE IF NOT EXISTS trajectories (
     run_id TEXT NOT NULL,
     method TEXT NOT NULL,
@@ -63,6 +81,11 @@ CREATE TABLE IF NOT EXISTS trajectories (
     PRIMARY KEY (run_id, method, episode)
 );
 """
+
+GAME_COLUMNS = [
+    "game", "world", "seed", "dynamic", "captured", "capture_time", "survival", "contacts",
+    "closest", "gamma", "beta",
+]  # fmt: skip
 
 EPISODE_COLUMNS = [
     "episode", "world", "seed", "success", "reached", "collided", "timed_out", "steps",
@@ -167,12 +190,46 @@ class ResultsStore:
         )
         self.db.commit()
 
-    def done(self, run_id: str, method: str) -> set[int]:
-        """Episodes of the run already stored."""
+    def done(self, run_id: str, method: str, table: str = "episodes") -> set[int]:
+        """Episodes (or games, with ``table="games"``) of the run already stored."""
+        key = {"episodes": "episode", "games": "game"}[table]
         rows = self.db.execute(
-            "SELECT episode FROM episodes WHERE run_id = ? AND method = ?", (run_id, method)
+            f"SELECT {key} FROM {table} WHERE run_id = ? AND method = ?", (run_id, method)
         )
         return {int(r[0]) for r in rows}
+
+    def add_game(self, run_id: str, experiment: str, method: str, result: Any) -> None:
+        """Store one game (and its trajectory, if recorded) and commit."""
+        row = asdict(result)
+        trajectory = row.pop("trajectory", None)
+        values = [
+            _real(row[c]) if not isinstance(row[c], bool) else int(row[c]) for c in GAME_COLUMNS
+        ]
+        with self.db:
+            columns = ", ".join(GAME_COLUMNS)
+            marks = ", ".join("?" * len(GAME_COLUMNS))
+            self.db.execute(
+                f"INSERT OR IGNORE INTO games (run_id, experiment, method, {columns}) "
+                f"VALUES (?, ?, ?, {marks})",
+                [run_id, experiment, method, *values],
+            )
+            if trajectory is not None:
+                self.db.execute(
+                    "INSERT OR IGNORE INTO trajectories VALUES (?, ?, ?, ?)",
+                    (run_id, method, result.game, json.dumps(trajectory)),
+                )
+
+    def games(self, run_id: str | None = None) -> list[dict[str, Any]]:
+        cols = ["run_id", "experiment", "method", *GAME_COLUMNS]
+        q = f"SELECT {', '.join(cols)} FROM games"
+        args: tuple[Any, ...] = ()
+        if run_id is not None:
+            q += " WHERE run_id = ?"
+            args = (run_id,)
+        return [
+            dict(zip(cols, r, strict=True))
+            for r in self.db.execute(q + " ORDER BY method, game", args)
+        ]
 
     def add(self, run_id: str, experiment: str, method: str, result: Any) -> None:
         """Store one episode (and its trajectory, if recorded) and commit."""

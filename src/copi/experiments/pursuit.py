@@ -1,0 +1,218 @@
+"""Experiment 2 (paper §IV, Fig. 5): the homicidal chauffeur played through the learnt
+capabilities, in stationary and dynamic worlds."""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import os
+from collections.abc import Callable
+from concurrent.futures import as_completed
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from copi.errors import InvalidArgumentError
+from copi.experiments.navigation import _capabilities
+from copi.games import ChauffeurParams
+from copi.games._world_game import ChauffeurGame
+from copi.learning import Capabilities
+from copi.online import ContextController
+from copi.world import RangeSensor
+
+__all__ = ["GameRow", "PursuitConfig", "pursue", "run_game", "run_games"]
+
+
+@dataclass(frozen=True)
+class PursuitConfig:
+    """One run of Experiment 2."""
+
+    capabilities: str
+    """Capabilities file (its content hash enters the run id)."""
+    evader: str = "capability"
+    """"capability": the game's direction instantiated through the ContextController
+    (walls and obstacles avoided); "game": the game's direction as the velocity."""
+    dynamic: bool = True
+    """Moving obstacles (10-15) or a stationary world."""
+    games: int = 100
+    seed: int = 0
+    """Game k draws world and starts from default_rng([seed, k]), obstacles from
+    default_rng([seed, k, 1]): a stationary and a dynamic run play the same games."""
+    horizon: int = 300
+    """Time steps the evader must survive."""
+    guard: float = 0.9
+    """The capability evader's guard (see ContextController)."""
+    gamma: float = 0.7
+    """V_e / V_p (V_e = 1 agent step per time step)."""
+    turn_radius: float = 4.0
+    capture_radius: float = 0.8
+    record: int = 3
+    """Games (the first ones) whose trajectories are stored for Fig. 5."""
+    capabilities_sha: str = field(default="", compare=False)
+
+    def __post_init__(self) -> None:
+        if self.evader not in ("capability", "game"):
+            raise InvalidArgumentError(
+                f"evader must be 'capability' or 'game'; got {self.evader!r}"
+            )
+        for name in ("games", "horizon"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or int(v) != v or v < 1:
+                raise InvalidArgumentError(f"{name} must be a positive int; got {v!r}")
+        self.params()  # validates gamma and the radii
+
+    @property
+    def method(self) -> str:
+        return f"{self.evader}-{'dynamic' if self.dynamic else 'static'}"
+
+    def params(self) -> ChauffeurParams:
+        if not 0 < self.gamma < 1:
+            raise InvalidArgumentError(f"gamma must be in (0, 1); got {self.gamma}")
+        return ChauffeurParams(
+            evader_speed=1.0,
+            pursuer_speed=1.0 / self.gamma,
+            turn_radius=self.turn_radius,
+            capture_radius=self.capture_radius,
+        )
+
+    def resolved(self) -> PursuitConfig:
+        Capabilities.load(self.capabilities)
+        with open(self.capabilities, "rb") as fh:
+            sha = hashlib.sha256(fh.read()).hexdigest()
+        return dataclasses.replace(self, capabilities_sha=sha)
+
+    def identity(self) -> dict[str, Any]:
+        d = dataclasses.asdict(self)
+        d.pop("capabilities")
+        return d
+
+    def run_id(self) -> str:
+        return hashlib.sha256(json.dumps(self.identity(), sort_keys=True).encode()).hexdigest()[:16]
+
+
+@dataclass(frozen=True)
+class GameRow:
+    """One game's row in the results store (table ``games``)."""
+
+    game: int
+    world: str
+    seed: int
+    dynamic: bool
+    captured: bool
+    capture_time: float
+    """Time of capture (NaN when the evader survived)."""
+    survival: float
+    """Capture time, or the horizon."""
+    contacts: int
+    """Steps at which the evader touched a moving obstacle."""
+    closest: float
+    gamma: float
+    beta: float
+    trajectory: dict[str, Any] | None = None
+
+
+def run_game(config: PursuitConfig, k: int) -> GameRow:
+    """Game k of a run; depends only on (config, k)."""
+    caps = _capabilities(config.capabilities, config.capabilities_sha)
+    params = config.params()
+    sensor = RangeSensor(caps.n_rays, float(caps.params.get("max_range", 10.0)))
+    game = ChauffeurGame.draw(
+        config.seed,
+        k,
+        dynamic=config.dynamic,
+        params=params,
+        sensor=sensor,
+        record=k < config.record,
+    )
+    controller = (
+        ContextController(caps, guard=config.guard) if config.evader == "capability" else None
+    )
+    while game.t < config.horizon and not game.captured:
+        wish = game.evader_wish()
+        if controller is None:
+            velocity = wish
+        else:
+            static = sensor.scan(game.world, game.sim.position) if config.guard > 0 else None
+            velocity, _ = controller.decide(game.sim.ranges, wish, static=static)
+        game.step(velocity)
+    trajectory = None
+    if game.record:
+        trajectory = {
+            "world": game.world.to_dict(),
+            "evader": np.asarray(game.sim.path).round(4).tolist(),
+            "pursuer": np.asarray(game.car_path).round(4).tolist(),
+            "traces": np.asarray(game.sim.traces).round(4).tolist(),
+            "radii": game.sim.radii.tolist(),
+            "captured": game.captured,
+        }
+    return GameRow(
+        game=k,
+        world=game.world.name,
+        seed=config.seed,
+        dynamic=config.dynamic,
+        captured=game.captured,
+        capture_time=game.capture_time,
+        survival=game.capture_time if game.captured else float(config.horizon),
+        contacts=game.contacts,
+        closest=game.closest,
+        gamma=params.gamma,
+        beta=params.beta,
+        trajectory=trajectory,
+    )
+
+
+def run_games(config: PursuitConfig, games: list[int]) -> list[GameRow]:
+    return [run_game(config, k) for k in games]
+
+
+def pursue(
+    config: PursuitConfig,
+    output: str | os.PathLike[str],
+    *,
+    workers: int = 1,
+    scheduler: str | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> str:
+    """Run (or resume) Experiment 2 into ``output``; returns the run id."""
+    from copi.experiments.executor import InlineExecutor, make_executor
+    from copi.experiments.store import ResultsStore
+
+    config = config.resolved()
+    run_id = config.run_id()
+    method = config.method
+    with ResultsStore(output) as store:
+        store.begin(run_id, "pursuit", method, config.identity())
+        todo = [k for k in range(config.games) if k not in store.done(run_id, method, "games")]
+        finished = config.games - len(todo)
+        if progress is not None:
+            progress(finished, config.games)
+
+        def store_all(rows: list[GameRow]) -> None:
+            nonlocal finished
+            for row in rows:
+                store.add_game(run_id, "pursuit", method, row)
+                finished += 1
+            if progress is not None:
+                progress(finished, config.games)
+
+        if not todo:
+            return run_id
+        with make_executor(workers, scheduler) as pool:
+            if isinstance(pool, InlineExecutor):
+                for k in todo:
+                    store_all([run_game(config, k)])
+                return run_id
+            n_workers = workers if scheduler is None else 4
+            size = max(1, min(8, len(todo) // (4 * n_workers)))
+            chunks = [todo[i : i + size] for i in range(0, len(todo), size)]
+            futures = [pool.submit(run_games, config, chunk) for chunk in chunks]
+            try:
+                for fut in as_completed(futures):
+                    store_all(fut.result())
+            except BaseException:
+                for f in futures:
+                    f.cancel()
+                raise
+    return run_id

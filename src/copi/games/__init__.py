@@ -1,0 +1,30 @@
+"""The homicidal chauffeur (paper §IV, second experiment): a differential game played
+through the learnt capabilities."""
+
+from __future__ import annotations
+
+from copi.games._chauffeur import (
+    ChauffeurParams,
+    Pursuer,
+    critical_beta,
+    evader_direction,
+    isaacs_control,
+)
+from copi.games._pettingzoo import ChauffeurEnv, parallel_env
+from copi.games._play import GameResult, first_contact, play_open, pursuer_step
+from copi.games._world_game import ChauffeurGame
+
+__all__ = [
+    "ChauffeurEnv",
+    "ChauffeurGame",
+    "ChauffeurParams",
+    "GameResult",
+    "Pursuer",
+    "critical_beta",
+    "evader_direction",
+    "first_contact",
+    "isaacs_control",
+    "parallel_env",
+    "play_open",
+    "pursuer_step",
+]

@@ -1,0 +1,135 @@
+"""The homicidal chauffeur against Isaacs (../shared/data/homicidal_chauffeur)."""
+
+from __future__ import annotations
+
+import csv
+import math
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from copi.errors import InvalidArgumentError
+from copi.games import (
+    ChauffeurGame,
+    ChauffeurParams,
+    Pursuer,
+    critical_beta,
+    parallel_env,
+    play_open,
+)
+
+DATA = (
+    Path(__file__).resolve().parents[3]
+    / "shared"
+    / "data"
+    / "homicidal_chauffeur"
+    / "critical_beta.csv"
+)
+
+
+def _table() -> dict[float, float]:
+    with open(DATA) as fh:
+        return {
+            float(r["gamma"]): float(r["beta_crit_numeric_barrier_trace"])
+            for r in csv.DictReader(fh)
+        }
+
+
+@pytest.mark.skipif(not DATA.exists(), reason="shared/data is not beside the project")
+def test_critical_beta_matches_the_barrier_trace() -> None:
+    for gamma, beta in _table().items():
+        assert critical_beta(gamma) == pytest.approx(beta, abs=1e-7)
+
+
+STARTS = [
+    (r * math.cos(a), r * math.sin(a))
+    for r in (2.0, 4.0)
+    for a in np.linspace(0, 2 * math.pi, 6, endpoint=False)
+]
+
+
+def _crit(gamma: float) -> float:
+    return _table()[gamma] if DATA.exists() else critical_beta(gamma)
+
+
+@pytest.mark.parametrize("gamma", [0.3, 0.5, 0.7, 0.9])
+def test_above_the_barrier_the_car_always_captures(gamma: float) -> None:
+    beta = _crit(gamma) + 0.05
+    p = ChauffeurParams(evader_speed=gamma, pursuer_speed=1.0, turn_radius=1.0, capture_radius=beta)
+    results = [play_open(p, s, [0, 0], math.pi / 2, horizon=120, dt=0.02) for s in STARTS]
+    assert all(r.captured for r in results)
+
+
+@pytest.mark.parametrize("gamma", [0.5, 0.7, 0.9])
+def test_below_the_barrier_the_evader_escapes(gamma: float) -> None:
+    # (gamma 0.3 is left out: beta_crit(0.3) = 0.045 < 0.05, no beta to test below it.)
+    beta = _crit(gamma) - 0.05
+    p = ChauffeurParams(evader_speed=gamma, pursuer_speed=1.0, turn_radius=1.0, capture_radius=beta)
+    results = [play_open(p, s, [0, 0], math.pi / 2, horizon=80, dt=0.02) for s in STARTS]
+    assert not any(r.captured for r in results)
+    assert min(r.closest for r in results) > beta
+
+
+@pytest.mark.parametrize("gamma", [0.3, 0.5, 0.7, 0.9])
+@pytest.mark.parametrize("d", [3.0, 7.5])
+def test_dead_ahead_capture_time(gamma: float, d: float) -> None:
+    p = ChauffeurParams(evader_speed=gamma, pursuer_speed=1.0, turn_radius=1.0, capture_radius=0.2)
+    straight = lambda e, car, heading, params: np.array([0.0, 1.0])  # noqa: E731
+    r = play_open(p, [0, d], [0, 0], math.pi / 2, horizon=200, dt=0.05, evader_policy=straight)
+    assert r.captured
+    assert r.capture_time == pytest.approx((d - 0.2) / (1 - gamma), rel=0.01)
+
+
+@settings(max_examples=60, deadline=None)
+@given(u=st.floats(-1, 1), heading=st.floats(0, 2 * math.pi), dt=st.floats(0.01, 2.0))
+def test_the_car_drives_exact_arcs(u: float, heading: float, dt: float) -> None:
+    p = ChauffeurParams(turn_radius=3.0)
+    car = Pursuer(np.zeros(2), heading, p)
+    disp = car.arc(u, dt)
+    dist = p.pursuer_speed * dt
+    assert car.heading - heading == pytest.approx(u * dist / p.turn_radius, abs=1e-12)
+    # the chord of an arc of length dist and radius R/|u|
+    if abs(u) > 1e-9:
+        rho = p.turn_radius / abs(u)
+        chord = 2 * rho * math.sin(dist / (2 * rho))
+    else:
+        chord = dist
+    assert np.linalg.norm(disp) == pytest.approx(chord, rel=1e-9, abs=1e-12)
+
+
+def test_games_are_reproducible_and_walls_stop_the_car() -> None:
+    a = ChauffeurGame.draw(3, 1, dynamic=True)
+    b = ChauffeurGame.draw(3, 1, dynamic=False)
+    assert np.array_equal(a.sim.position, b.sim.position)
+    assert np.array_equal(a.car.position, b.car.position)
+    assert len(b.sim.radii) == 0 and len(a.sim.radii) >= 10
+    for _ in range(150):
+        if a.step(a.evader_wish()):
+            break
+        assert a.world.clearance(a.car.position) >= 0.3 - 1e-6
+        assert a.world.contains(a.car.position)
+
+
+def test_bad_parameters() -> None:
+    with pytest.raises(InvalidArgumentError, match="need 0 < evader_speed < pursuer_speed"):
+        ChauffeurParams(evader_speed=2.0, pursuer_speed=1.0)
+    with pytest.raises(InvalidArgumentError, match="gamma"):
+        critical_beta(1.0)
+
+
+def test_pettingzoo_parallel_api() -> None:
+    from pettingzoo.test import parallel_api_test
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        parallel_api_test(parallel_env(), num_cycles=200)
+        parallel_api_test(parallel_env(dynamic=False), num_cycles=100)
+    env = parallel_env(render_mode="rgb_array")
+    obs, _ = env.reset(seed=1)
+    assert obs["evader"].shape == (36,) and obs["pursuer"].shape == (2,)
+    img = env.render()
+    assert img is not None and img.shape[2] == 3

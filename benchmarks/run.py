@@ -7,7 +7,13 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from benchmarks import bench_learning, bench_online, bench_planning, bench_world  # noqa: E402
+from benchmarks import (  # noqa: E402
+    bench_games,
+    bench_learning,
+    bench_online,
+    bench_planning,
+    bench_world,
+)
 
 
 def main() -> int:
@@ -16,6 +22,7 @@ def main() -> int:
         "planning": bench_planning.main(),
         "learning": bench_learning.main(),
         "online": bench_online.main(),
+        "games": bench_games.main(),
     }
     missed = [name for name, ok in results.items() if not ok]
     print("all goals met" if not missed else f"goals missed in: {', '.join(missed)}")

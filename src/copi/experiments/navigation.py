@@ -3,14 +3,10 @@ compare the path with the optimal one on the stationary snapshot at t = 0."""
 
 from __future__ import annotations
 
-import dataclasses
-import hashlib
-import json
 import math
 import os
 import time
 from collections.abc import Callable
-from concurrent.futures import as_completed
 from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Any
@@ -18,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from copi.errors import CopiError, InvalidArgumentError
+from copi.experiments._runs import RunIdentity, run_into_store
 from copi.learning import Capabilities
 from copi.online import ContextController, make_strategy
 from copi.planning import shortest_path
@@ -27,7 +24,7 @@ __all__ = ["EpisodeResult", "NavigationConfig", "evaluate", "run_episode", "run_
 
 
 @dataclass(frozen=True)
-class NavigationConfig:
+class NavigationConfig(RunIdentity):
     """One evaluation run of Experiment 1: everything that decides its results."""
 
     capabilities: str
@@ -66,22 +63,6 @@ class NavigationConfig:
             raise InvalidArgumentError(
                 f"strategy must be 'route' or 'greedy'; got {self.strategy!r}"
             )
-
-    def resolved(self) -> NavigationConfig:
-        """The config with the capabilities' content hash (checks the file loads)."""
-        Capabilities.load(self.capabilities)
-        with open(self.capabilities, "rb") as fh:
-            sha = hashlib.sha256(fh.read()).hexdigest()
-        return dataclasses.replace(self, capabilities_sha=sha)
-
-    def identity(self) -> dict[str, Any]:
-        """What makes two runs the same run (paths and output options excluded)."""
-        d = dataclasses.asdict(self)
-        d.pop("capabilities")
-        return d
-
-    def run_id(self) -> str:
-        return hashlib.sha256(json.dumps(self.identity(), sort_keys=True).encode()).hexdigest()[:16]
 
 
 @dataclass(frozen=True)
@@ -234,44 +215,18 @@ def evaluate(
     after an interruption finishes the missing ones only. Each finished episode is
     committed at once.
     """
-    from copi.experiments.executor import InlineExecutor, make_executor
-    from copi.experiments.store import ResultsStore
-
     config = config.resolved()
-    run_id = config.run_id()
-    with ResultsStore(output) as store:
-        store.begin(run_id, "navigation", config.method, config.identity())
-        todo = [k for k in range(config.worlds) if k not in store.done(run_id, config.method)]
-        total = config.worlds
-        finished = total - len(todo)
-        if progress is not None:
-            progress(finished, total)
-        if not todo:
-            return run_id
-
-        def store_all(results: list[EpisodeResult]) -> None:
-            nonlocal finished
-            for result in results:
-                store.add(run_id, "navigation", config.method, result)
-                finished += 1
-            if progress is not None:
-                progress(finished, total)
-
-        with make_executor(workers, scheduler) as pool:
-            if isinstance(pool, InlineExecutor):
-                # In this process: run and commit one episode at a time.
-                for k in todo:
-                    store_all([run_episode(config, k)])
-                return run_id
-            n_workers = workers if scheduler is None else 4
-            size = max(1, min(16, len(todo) // (4 * n_workers)))
-            chunks = [todo[i : i + size] for i in range(0, len(todo), size)]
-            futures = [pool.submit(run_episodes, config, chunk) for chunk in chunks]
-            try:
-                for fut in as_completed(futures):
-                    store_all(fut.result())
-            except BaseException:
-                for f in futures:
-                    f.cancel()
-                raise
-    return run_id
+    return run_into_store(
+        config,
+        output,
+        experiment="navigation",
+        method=config.method,
+        table="episodes",
+        total=config.worlds,
+        one=run_episode,
+        many=run_episodes,
+        workers=workers,
+        scheduler=scheduler,
+        progress=progress,
+        chunk=16,
+    )

@@ -3,22 +3,18 @@ capabilities, in stationary and dynamic worlds."""
 
 from __future__ import annotations
 
-import dataclasses
-import hashlib
-import json
 import os
 from collections.abc import Callable
-from concurrent.futures import as_completed
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from copi.errors import InvalidArgumentError
+from copi.experiments._runs import RunIdentity, run_into_store
 from copi.experiments.navigation import _capabilities
 from copi.games import ChauffeurParams
 from copi.games._world_game import ChauffeurGame
-from copi.learning import Capabilities
 from copi.online import ContextController
 from copi.world import RangeSensor
 
@@ -26,7 +22,7 @@ __all__ = ["GameRow", "PursuitConfig", "pursue", "run_game", "run_games"]
 
 
 @dataclass(frozen=True)
-class PursuitConfig:
+class PursuitConfig(RunIdentity):
     """One run of Experiment 2."""
 
     capabilities: str
@@ -76,20 +72,6 @@ class PursuitConfig:
             turn_radius=self.turn_radius,
             capture_radius=self.capture_radius,
         )
-
-    def resolved(self) -> PursuitConfig:
-        Capabilities.load(self.capabilities)
-        with open(self.capabilities, "rb") as fh:
-            sha = hashlib.sha256(fh.read()).hexdigest()
-        return dataclasses.replace(self, capabilities_sha=sha)
-
-    def identity(self) -> dict[str, Any]:
-        d = dataclasses.asdict(self)
-        d.pop("capabilities")
-        return d
-
-    def run_id(self) -> str:
-        return hashlib.sha256(json.dumps(self.identity(), sort_keys=True).encode()).hexdigest()[:16]
 
 
 @dataclass(frozen=True)
@@ -176,43 +158,18 @@ def pursue(
     progress: Callable[[int, int], None] | None = None,
 ) -> str:
     """Run (or resume) Experiment 2 into ``output``; returns the run id."""
-    from copi.experiments.executor import InlineExecutor, make_executor
-    from copi.experiments.store import ResultsStore
-
     config = config.resolved()
-    run_id = config.run_id()
-    method = config.method
-    with ResultsStore(output) as store:
-        store.begin(run_id, "pursuit", method, config.identity())
-        todo = [k for k in range(config.games) if k not in store.done(run_id, method, "games")]
-        finished = config.games - len(todo)
-        if progress is not None:
-            progress(finished, config.games)
-
-        def store_all(rows: list[GameRow]) -> None:
-            nonlocal finished
-            for row in rows:
-                store.add_game(run_id, "pursuit", method, row)
-                finished += 1
-            if progress is not None:
-                progress(finished, config.games)
-
-        if not todo:
-            return run_id
-        with make_executor(workers, scheduler) as pool:
-            if isinstance(pool, InlineExecutor):
-                for k in todo:
-                    store_all([run_game(config, k)])
-                return run_id
-            n_workers = workers if scheduler is None else 4
-            size = max(1, min(8, len(todo) // (4 * n_workers)))
-            chunks = [todo[i : i + size] for i in range(0, len(todo), size)]
-            futures = [pool.submit(run_games, config, chunk) for chunk in chunks]
-            try:
-                for fut in as_completed(futures):
-                    store_all(fut.result())
-            except BaseException:
-                for f in futures:
-                    f.cancel()
-                raise
-    return run_id
+    return run_into_store(
+        config,
+        output,
+        experiment="pursuit",
+        method=config.method,
+        table="games",
+        total=config.games,
+        one=run_game,
+        many=run_games,
+        workers=workers,
+        scheduler=scheduler,
+        progress=progress,
+        chunk=8,
+    )

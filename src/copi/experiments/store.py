@@ -198,58 +198,41 @@ class ResultsStore:
         )
         return {int(r[0]) for r in rows}
 
-    def add_game(self, run_id: str, experiment: str, method: str, result: Any) -> None:
-        """Store one game (and its trajectory, if recorded) and commit."""
-        row = asdict(result)
-        trajectory = row.pop("trajectory", None)
-        values = [
-            _real(row[c]) if not isinstance(row[c], bool) else int(row[c]) for c in GAME_COLUMNS
-        ]
-        with self.db:
-            columns = ", ".join(GAME_COLUMNS)
-            marks = ", ".join("?" * len(GAME_COLUMNS))
-            self.db.execute(
-                f"INSERT OR IGNORE INTO games (run_id, experiment, method, {columns}) "
-                f"VALUES (?, ?, ?, {marks})",
-                [run_id, experiment, method, *values],
-            )
-            if trajectory is not None:
-                self.db.execute(
-                    "INSERT OR IGNORE INTO trajectories VALUES (?, ?, ?, ?)",
-                    (run_id, method, result.game, json.dumps(trajectory)),
-                )
-
-    def games(self, run_id: str | None = None) -> list[dict[str, Any]]:
-        cols = ["run_id", "experiment", "method", *GAME_COLUMNS]
-        q = f"SELECT {', '.join(cols)} FROM games"
-        args: tuple[Any, ...] = ()
-        if run_id is not None:
-            q += " WHERE run_id = ?"
-            args = (run_id,)
-        return [
-            dict(zip(cols, r, strict=True))
-            for r in self.db.execute(q + " ORDER BY method, game", args)
-        ]
-
     def add(self, run_id: str, experiment: str, method: str, result: Any) -> None:
         """Store one episode (and its trajectory, if recorded) and commit."""
+        self._insert(
+            "episodes", EPISODE_COLUMNS, run_id, experiment, method, result, result.episode
+        )
+
+    def add_game(self, run_id: str, experiment: str, method: str, result: Any) -> None:
+        """Store one game (and its trajectory, if recorded) and commit."""
+        self._insert("games", GAME_COLUMNS, run_id, experiment, method, result, result.game)
+
+    def _insert(
+        self,
+        table: str,
+        columns: list[str],
+        run_id: str,
+        experiment: str,
+        method: str,
+        result: Any,
+        key: int,
+    ) -> None:
         row = asdict(result)
         trajectory = row.pop("trajectory", None)
-        values = [
-            _real(row[c]) if not isinstance(row[c], bool) else int(row[c]) for c in EPISODE_COLUMNS
-        ]
-        with self.db:  # one transaction: the episode and its trajectory, or nothing
-            columns = ", ".join(EPISODE_COLUMNS)
-            marks = ", ".join("?" * len(EPISODE_COLUMNS))
+        values = [int(row[c]) if isinstance(row[c], bool) else _real(row[c]) for c in columns]
+        names = ", ".join(columns)
+        marks = ", ".join("?" * len(columns))
+        with self.db:  # one transaction: the row and its trajectory, or nothing
             self.db.execute(
-                f"INSERT OR IGNORE INTO episodes (run_id, experiment, method, {columns}) "
+                f"INSERT OR IGNORE INTO {table} (run_id, experiment, method, {names}) "
                 f"VALUES (?, ?, ?, {marks})",
                 [run_id, experiment, method, *values],
             )
             if trajectory is not None:
                 self.db.execute(
                     "INSERT OR IGNORE INTO trajectories VALUES (?, ?, ?, ?)",
-                    (run_id, method, result.episode, json.dumps(trajectory)),
+                    (run_id, method, key, json.dumps(trajectory)),
                 )
 
     # -- reading back -----------------------------------------------------------------
@@ -274,6 +257,18 @@ class ResultsStore:
         return [
             dict(zip(cols, r, strict=True))
             for r in self.db.execute(q + " ORDER BY method, episode", tuple(args))
+        ]
+
+    def games(self, run_id: str | None = None) -> list[dict[str, Any]]:
+        cols = ["run_id", "experiment", "method", *GAME_COLUMNS]
+        q = f"SELECT {', '.join(cols)} FROM games"
+        args: tuple[Any, ...] = ()
+        if run_id is not None:
+            q += " WHERE run_id = ?"
+            args = (run_id,)
+        return [
+            dict(zip(cols, r, strict=True))
+            for r in self.db.execute(q + " ORDER BY method, game", args)
         ]
 
     def trajectories(self, run_id: str, method: str) -> list[dict[str, Any]]:

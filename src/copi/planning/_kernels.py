@@ -275,13 +275,15 @@ def reflex_vertices(xy, starts):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True, inline="always")
-def _tangent(vx, vy, px, py, qx, qy, wx, wy):  # type: ignore[no-untyped-def]
-    """Whether the line from w through v leaves v's ring neighbours p and q on one side
+def _tangent(xy, prev, nxt, v, wx, wy):  # type: ignore[no-untyped-def]
+    """Whether the line from w through vertex v leaves v's ring neighbours on one side
     (a shortest path through a vertex bends around it, never into it)."""
+    vx = xy[v, 0]
+    vy = xy[v, 1]
     dx = vx - wx
     dy = vy - wy
-    s1 = dx * (py - wy) - dy * (px - wx)
-    s2 = dx * (qy - wy) - dy * (qx - wx)
+    s1 = dx * (xy[prev[v], 1] - wy) - dy * (xy[prev[v], 0] - wx)
+    s2 = dx * (xy[nxt[v], 1] - wy) - dy * (xy[nxt[v], 0] - wx)
     return s1 * s2 >= 0.0
 
 
@@ -300,27 +302,9 @@ def visibility_edges(xy, starts, reflex, eps):  # type: ignore[no-untyped-def]
         i = reflex[a]
         for b in range(a + 1, r):
             j = reflex[b]
-            if not _tangent(
-                xy[i, 0],
-                xy[i, 1],
-                xy[prev[i], 0],
-                xy[prev[i], 1],
-                xy[nxt[i], 0],
-                xy[nxt[i], 1],
-                xy[j, 0],
-                xy[j, 1],
-            ):
+            if not _tangent(xy, prev, nxt, i, xy[j, 0], xy[j, 1]):
                 continue
-            if not _tangent(
-                xy[j, 0],
-                xy[j, 1],
-                xy[prev[j], 0],
-                xy[prev[j], 1],
-                xy[nxt[j], 0],
-                xy[nxt[j], 1],
-                xy[i, 0],
-                xy[i, 1],
-            ):
+            if not _tangent(xy, prev, nxt, j, xy[i, 0], xy[i, 1]):
                 continue
             if not segment_free(xy[i, 0], xy[i, 1], xy[j, 0], xy[j, 1], xy, starts, eps):
                 continue
@@ -346,16 +330,7 @@ def visible_from(px, py, xy, starts, reflex, eps):  # type: ignore[no-untyped-de
     out = np.zeros(reflex.shape[0], dtype=np.bool_)
     for a in range(reflex.shape[0]):
         i = reflex[a]
-        if not _tangent(
-            xy[i, 0],
-            xy[i, 1],
-            xy[prev[i], 0],
-            xy[prev[i], 1],
-            xy[nxt[i], 0],
-            xy[nxt[i], 1],
-            px,
-            py,
-        ):
+        if not _tangent(xy, prev, nxt, i, px, py):
             continue
         out[a] = segment_free(px, py, xy[i, 0], xy[i, 1], xy, starts, eps)
     return out

@@ -484,7 +484,8 @@ def reproduce_command(
     """The paper's experiments end to end: learn capabilities (100 worlds x 300 steps),
     Experiment 1 on 1549 dynamic worlds in the faithful mode (4 directions, the paper's
     chain) and the extended mode (16 directions, candidates checked against the live
-    reading with a guard of 0.9 = agent radius + an obstacle's step), Experiment 2 (200
+    reading with a guard of 1.2: the agent radius, an obstacle's step and a margin),
+    Experiment 2 (200
     homicidal-chauffeur games, stationary and dynamic, capability and game evaders), and
     the report."""
     from copi.experiments.navigation import NavigationConfig, evaluate
@@ -495,7 +496,7 @@ def reproduce_command(
     output.mkdir(parents=True, exist_ok=True)
     episodes = 100 if quick else 1549
     results = output / "experiment1.sqlite"
-    modes = [("faithful", 4, 0.0), ("extended", 16, 0.9)]
+    modes = [("faithful", 4, 0.0), ("extended", 16, 1.2)]
     with progress() as bar:
         for name, directions, guard in modes:
             caps_path = output / f"capabilities-{name}.npz"

@@ -38,8 +38,9 @@ class PursuitConfig(RunIdentity):
     default_rng([seed, k, 1]): a stationary and a dynamic run play the same games."""
     horizon: int = 300
     """Time steps the evader must survive."""
-    guard: float = 0.9
-    """The capability evader's guard (see ContextController)."""
+    guard: float = 1.2
+    """The capability evader's guard (see ContextController); as Experiment 1's extended
+    mode."""
     gamma: float = 0.7
     """V_e / V_p (V_e = 1 agent step per time step)."""
     turn_radius: float = 4.0

@@ -38,7 +38,8 @@ class Decision:
     candidate_actions: NDArray[np.float64]
     """Those policies' first moves mapped back to the world by g^-1, shape (k, 2)."""
     choice: str | None
-    """The direction the global strategy picked (None: no policy here)."""
+    """The direction the global strategy picked (None: no policy here; "escape": with a
+    guard, no policy was safe and the agent moved where the reading left most room)."""
     action: NDArray[np.float64]
     """The velocity sent to the world."""
 
@@ -75,8 +76,9 @@ class ContextController:
         only if, after its step, the live reading's hit points are all at least ``guard``
         away (and its path grazes none closer than half of that), i.e. the template's
         passability is checked against the context it is instantiated in; if no
-        candidate passes, the one leaving the most room is taken. Typically the agent
-        radius plus an obstacle's step plus a margin.
+        candidate passes, the agent escapes along the compass direction the reading
+        leaves most room in. Typically the agent radius plus an obstacle's step plus a
+        margin.
     """
 
     def __init__(
@@ -219,7 +221,7 @@ class ContextController:
             element=self.capabilities.group.words[g] or "id",
             candidates=[self.names[d] for d in np.flatnonzero(mask)],
             candidate_actions=cand[node][mask].copy(),
-            choice=None if choice < 0 else self.names[choice],
+            choice=(None if choice == -1 else "escape" if choice == -2 else self.names[choice]),
             action=action,
         )
 

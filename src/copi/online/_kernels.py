@@ -55,6 +55,39 @@ def decide(  # type: ignore[no-untyped-def]
     _choose(s, static, node, d2, cand, ok, wx, wy, reach, guard, cos, sin, max_range, out)
 
 
+@njit(cache=True, inline="always")
+def _room(s, static, cos, sin, max_range, ax, ay, step):  # type: ignore[no-untyped-def]
+    """For a step of length ``step`` along (ax, ay): the least distance from the moved
+    agent to a hit the static map does not explain (a moving obstacle), the least
+    distance from its path to such a hit, and from its path to any hit."""
+    end = np.inf
+    sweep = np.inf
+    sweep_all = np.inf
+    ex = step * ax
+    ey = step * ay
+    for i in range(s.shape[0]):
+        if s[i] >= max_range:
+            continue
+        px = s[i] * cos[i]
+        py = s[i] * sin[i]
+        t = px * ax + py * ay
+        if t < 0.0:
+            t = 0.0
+        elif t > step:
+            t = step
+        dd = math.sqrt((px - t * ax) ** 2 + (py - t * ay) ** 2)
+        if dd < sweep_all:
+            sweep_all = dd
+        if s[i] >= static[i] - 0.05:
+            continue  # explained by the static map: a wall
+        if dd < sweep:
+            sweep = dd
+        de = math.sqrt((px - ex) ** 2 + (py - ey) ** 2)
+        if de < end:
+            end = de
+    return end, sweep, sweep_all
+
+
 @njit(cache=True, inline="always", fastmath=FAST)
 def _choose(  # type: ignore[no-untyped-def]
     s, static, node, d2, cand, ok, wx, wy, reach, guard, cos, sin, max_range, out
@@ -64,12 +97,13 @@ def _choose(  # type: ignore[no-untyped-def]
     Writes out = (ax, ay, node, d2, choice); choice -1: no candidate; node -1: the
     reading is not finite (nothing else is computed).
 
-    With ``guard`` > 0, a candidate is kept only if, after its step, every hit point of
-    the reading is at least ``guard`` away, and its path passes no hit point closer than
-    half of that (the template's passability checked against the live reading); if none
-    is left, the one leaving the most room is taken. Rays whose reading ``static``
-    explains (what the static map alone would show, when known) are not hazards: walls
-    stop the agent, they do not collide with it.
+    With ``guard`` > 0, a candidate is kept only if, after its step, every moving
+    obstacle's hit point is at least ``guard`` away and its path passes none closer than
+    half of that (the template's passability checked against the live reading). If none
+    is left, the agent escapes along the compass direction that leaves the most room
+    (choice -2), not grazing any hit; failing that, the candidate leaving the most room
+    is taken. Hits that ``static`` explains (what the static map alone would show, when
+    known) are walls: they stop the agent, they do not collide with it.
     """
     out[2] = node
     out[3] = d2
@@ -98,33 +132,7 @@ def _choose(  # type: ignore[no-untyped-def]
                 along = score * reach
                 if along > 0.0:
                     step = min(1.0, along)
-            # Room after the step (to every hit point of the live reading), and room along
-            # it (the centre's path must not graze a hit).
-            end = np.inf
-            sweep = np.inf
-            ex = step * ax
-            ey = step * ay
-            for i in range(s.shape[0]):
-                # only hits the static map does not explain (moving obstacles) count
-                if s[i] >= max_range or s[i] >= static[i] - 0.05:
-                    continue
-                px = s[i] * cos[i]
-                py = s[i] * sin[i]
-                qx = px - ex
-                qy = py - ey
-                de = math.sqrt(qx * qx + qy * qy)
-                if de < end:
-                    end = de
-                t = px * ax + py * ay
-                if t < 0.0:
-                    t = 0.0
-                elif t > step:
-                    t = step
-                dx = px - t * ax
-                dy = py - t * ay
-                dd = math.sqrt(dx * dx + dy * dy)
-                if dd < sweep:
-                    sweep = dd
+            end, sweep, _ = _room(s, static, cos, sin, max_range, ax, ay, step)
             if end < guard or sweep < 0.5 * guard:
                 if end > fallback_clear:
                     fallback_clear = end
@@ -133,6 +141,26 @@ def _choose(  # type: ignore[no-untyped-def]
         if score > best_score:
             best_score = score
             best = d
+    if best < 0 and guard > 0.0 and fallback_clear < guard:
+        # Nothing the template offers is safe: escape along whichever compass direction
+        # leaves the most room (the live reading overrides the template here).
+        n = cand.shape[1]
+        esc = -1
+        esc_clear = fallback_clear
+        for d in range(n):
+            a0 = 2.0 * math.pi * d / n
+            end, _, sweep_all = _room(
+                s, static, cos, sin, max_range, math.cos(a0), math.sin(a0), 1.0
+            )
+            if sweep_all >= 0.35 and end > esc_clear:
+                esc_clear = end
+                esc = d
+        if esc >= 0:
+            a0 = 2.0 * math.pi * esc / n
+            out[0] = math.cos(a0)
+            out[1] = math.sin(a0)
+            out[4] = -2.0
+            return
     if best < 0:
         best = fallback
     if best < 0:

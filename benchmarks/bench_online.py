@@ -29,7 +29,7 @@ def main() -> bool:
     rng = np.random.default_rng(0)
     want = rng.normal(size=(len(readings), 2))
     plain = ContextController(caps)
-    guarded = ContextController(caps, guard=0.9)
+    guarded = ContextController(caps, guard=1.2)
     plain.decide(readings[0], want[0])
     guarded.decide(readings[0], want[0])
     batch = readings[:1000]
@@ -50,7 +50,7 @@ def main() -> bool:
 
     rows = [
         Timing("decide, one agent", single(plain)),
-        Timing("decide, one agent, guard 0.9", single(guarded)),
+        Timing("decide, one agent, guard 1.2", single(guarded)),
         Timing(
             "decide_batch, 1000 agents",
             min(timeit.repeat(lambda: plain.decide_batch(batch, want[:1000]), number=20, repeat=5))
@@ -64,7 +64,7 @@ def main() -> bool:
         None,
         {rows[0].name: 10e-6, rows[1].name: 10e-6, rows[2].name: 3e-6},
     )
-    cfg = NavigationConfig(str(caps_path), worlds=400, method="bench", guard=0.9)
+    cfg = NavigationConfig(str(caps_path), worlds=400, method="bench", guard=1.2)
     walls = {}
     for workers in (1, 2):
         t0 = time.perf_counter()

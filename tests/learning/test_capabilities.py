@@ -102,6 +102,14 @@ def test_bad_files_are_refused(caps: Capabilities, tmp_path: Path) -> None:
     with pytest.raises(CapabilitiesFormatError, match=r"missing arrays \['pol_actions'\]"):
         Capabilities.load(doctored("drop.npz", drop))
 
+    def other_sensor(a):
+        meta = json.loads(str(a["metadata"][()]))
+        meta["params"]["n_rays"] = 16
+        a["metadata"] = np.array(json.dumps(meta))
+
+    with pytest.raises(CapabilitiesFormatError, match="readings have 32 rays but its sensor 16"):
+        Capabilities.load(doctored("sensor.npz", other_sensor))
+
     def bad_index(a):
         a["lm_node_landmark"] = a["lm_node_landmark"] + 10_000
 

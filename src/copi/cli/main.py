@@ -374,7 +374,6 @@ def evaluate_command(
         guard=guard,
         continual=continual,
     )
-    _check_sensor(capabilities, world_file)
     output.parent.mkdir(parents=True, exist_ok=True)
     with progress() as bar:
         task = bar.add_task(f"{method}: episodes", total=worlds)
@@ -392,20 +391,6 @@ def evaluate_command(
         f"contact {100 * s['contact']:.1f} %, timeout {100 * s['timeout']:.1f} %, median excess "
         f"{100 * s['excess_median']:.1f} %, {s['decisions_per_s']:,.0f} decisions/s"
     )
-
-
-def _check_sensor(capabilities: Path, world_file: Path | None) -> None:
-    """The capabilities must describe the sensor the experiment uses (32 rays)."""
-    from copi.errors import InvalidArgumentError
-    from copi.learning import Capabilities
-
-    caps = Capabilities.load(capabilities)
-    expected = int(caps.params.get("n_rays", caps.n_rays))
-    if caps.n_rays != expected:
-        raise InvalidArgumentError(
-            f"{capabilities}: its map has {caps.n_rays} rays but its sensor {expected}"
-        )
-    del world_file
 
 
 @app.command("pursuit")

@@ -291,6 +291,9 @@ def _check_consistent(p: Path, c: Capabilities) -> None:
     T = len(c.reduction.templates)
     D = len(c.policies.names)
     problems = []
+    rays = c.params.get("n_rays", dim)
+    if rays != dim:
+        problems.append(f"the map's readings have {dim} rays but its sensor {rays}")
     if c.edges.size and (c.edges.min() < 0 or c.edges.max() >= n):
         problems.append("edges refer to missing nodes")
     if c.landmarks.points.shape != (L, dim):

@@ -11,7 +11,6 @@ from numpy.typing import NDArray
 
 from copi.errors import InvalidArgumentError
 from copi.learning import Capabilities, GrowingNeuralGas
-from copi.learning._gng_kernels import nearest as _nearest_kernel
 from copi.online import _kernels
 
 __all__ = ["ContextController", "Decision"]
@@ -118,8 +117,6 @@ class ContextController:
         self._template = caps.node_template
         self._element = caps.node_element
         self._tables(self._template, self._element)
-        self._idx = np.empty(1, dtype=np.int64)
-        self._d2 = np.empty(1)
         self._extra: GrowingNeuralGas | None = None
         self._pending: list[NDArray[np.float64]] = []
         self._extra_template = np.zeros(0, dtype=np.int64)
@@ -138,20 +135,14 @@ class ContextController:
     # -- the chain ---------------------------------------------------------------------
 
     def _check(self, ranges: Any) -> NDArray[np.float64]:
+        """Readings as floats with the capabilities' ray count (finiteness is checked in
+        the compiled chain)."""
         s = np.asarray(ranges, dtype=np.float64)
         if s.shape[-1:] != (self.n_rays,):
             raise InvalidArgumentError(
                 f"readings must have {self.n_rays} rays (as the capabilities); got shape {s.shape}"
             )
-        if not np.isfinite(s).all():
-            raise InvalidArgumentError("readings must be finite")
         return s
-
-    def lookup(self, ranges: Any) -> tuple[int, float]:
-        """chi_t and d_S(s_t, chi_t) for one reading (steps 1)."""
-        s = self._check(ranges)
-        _nearest_kernel(s[None], self._nodes, len(self._nodes), self._idx, self._d2)
-        return int(self._idx[0]), math.sqrt(self._d2[0])
 
     def decide(
         self,

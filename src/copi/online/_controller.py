@@ -10,6 +10,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from copi.errors import InvalidArgumentError
+from copi.geometry import ring_angles
 from copi.learning import Capabilities, GrowingNeuralGas
 from copi.online import _kernels
 
@@ -102,8 +103,6 @@ class ContextController:
         if not (math.isfinite(guard) and guard >= 0):
             raise InvalidArgumentError(f"guard must be a finite number >= 0; got {guard!r}")
         self.guard = float(guard)
-        from copi.geometry import ring_angles
-
         angles = ring_angles(self.n_rays)
         self._cos = np.cos(angles)
         self._sin = np.sin(angles)
@@ -116,7 +115,7 @@ class ContextController:
         self._landmark = caps.landmarks.node_landmark
         self._template = caps.node_template
         self._element = caps.node_element
-        self._tables(self._template, self._element)
+        self._cand, self._ok = self._candidates(self._template, self._element)
         self._extra: GrowingNeuralGas | None = None
         self._pending: list[NDArray[np.float64]] = []
         self._extra_template = np.zeros(0, dtype=np.int64)
@@ -124,13 +123,17 @@ class ContextController:
         self.n_decisions = 0
         self.n_unfamiliar = 0
 
-    def _tables(self, template: NDArray[np.int64], element: NDArray[np.int64]) -> None:
+    def _candidates(
+        self, template: NDArray[np.int64], element: NDArray[np.int64]
+    ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+        """Per node: its template's policies' first moves mapped back to the world by
+        g^-1 (n, D, 2), and which of them exist (n, D)."""
         pol = self.capabilities.policies
-        mats = self.capabilities.group.matrices[element]  # (N, 2, 2)
+        mats = self.capabilities.group.matrices[element]  # (n, 2, 2)
         # g^-1 = g^T for the ring's rotations and mirrors; solve() keeps any matrix exact.
-        acts = pol.actions[template]  # (N, D, 2)
-        self._cand = np.ascontiguousarray(np.linalg.solve(mats[:, None], acts[..., None])[..., 0])
-        self._ok = np.ascontiguousarray(pol.passable[template])
+        acts = pol.actions[template]  # (n, D, 2)
+        cand = np.linalg.solve(mats[:, None], acts[..., None])[..., 0]
+        return np.ascontiguousarray(cand), np.ascontiguousarray(pol.passable[template])
 
     # -- the chain ---------------------------------------------------------------------
 
@@ -287,12 +290,9 @@ class ContextController:
             [group.compose(int(red.element[j]), int(e)) for j, e in zip(best_lm, h, strict=True)],
             dtype=np.int64,
         )
-        pol = caps.policies
-        mats = group.matrices[self._extra_element]
-        acts = pol.actions[self._extra_template]
-        cand = np.linalg.solve(mats[:, None], acts[..., None])[..., 0]
+        cand, ok = self._candidates(self._extra_template, self._extra_element)
         self._all_cand = np.concatenate([self._cand, cand])
-        self._all_ok = np.concatenate([self._ok, pol.passable[self._extra_template]])
+        self._all_ok = np.concatenate([self._ok, ok])
 
     @property
     def n_learnt(self) -> int:

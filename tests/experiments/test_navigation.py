@@ -147,3 +147,17 @@ def test_report_reads_everything_from_the_store(caps_path: str, tmp_path: Path) 
     assert "| a | 6 |" in text and "| b | 6 |" in text
     names = sorted(p.name for p in (tmp_path / "report").iterdir())
     assert "fig4_excess.png" in names and "fig3_a.png" in names
+
+
+def test_a_world_file_is_run_episode_by_episode(caps_path: str, tmp_path: Path) -> None:
+    from copi.world import save_worlds
+    from tests.common import PILLARS, U_TRAP
+
+    worlds = tmp_path / "w.json"
+    save_worlds([U_TRAP, PILLARS], worlds)
+    out = tmp_path / "r.sqlite"
+    evaluate(NavigationConfig(caps_path, worlds=4, world_file=str(worlds), max_steps=300), out)
+    rows = _rows(out)
+    assert [r["world"] for r in rows] == ["u-trap", "pillars", "u-trap", "pillars"]
+    # U_TRAP fixes start and goal, 13 apart: the frozen obstacles can only lengthen it
+    assert rows[0]["optimal_length"] >= 13.0 - 1e-9

@@ -137,3 +137,42 @@ def test_a_map_becomes_a_world() -> None:
     s = lines[-1]
     plan = shortest_path(world, cell_center(grid, s.start), cell_center(grid, s.goal))
     assert plan.length <= s.optimal_length + 1e-6
+
+
+MESH = DATA / "polygons" / "ironharvest_mesh" / "scene_mp_2p_01.mesh"
+
+
+def _check_mesh(sample: int | None) -> int:
+    from copi.planning.mesh import read_mesh
+
+    graph = VisibilityGraph.from_geometry(read_mesh(MESH), through_pinch_points=False)
+    rows = [ln.split() for ln in MESH.with_suffix(".mesh.scen").read_text().splitlines()[1:]]
+    rows = [r for r in rows if r]
+    if sample is not None:
+        rows = [rows[i] for i in np.linspace(0, len(rows) - 1, sample).astype(int)]
+    for r in rows:
+        s, g, expected = (float(r[4]), float(r[5])), (float(r[6]), float(r[7])), float(r[8])
+        plan = graph.shortest_path(s, g)
+        assert plan.length == pytest.approx(expected, rel=1e-9, abs=1e-9), r
+    return len(rows)
+
+
+@pytest.mark.skipif(not MESH.exists(), reason="the Iron Harvest mesh is not in shared/data")
+def test_iron_harvest_mesh_sample() -> None:
+    assert _check_mesh(sample=100) == 100
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not MESH.exists(), reason="the Iron Harvest mesh is not in shared/data")
+def test_iron_harvest_mesh_every_query() -> None:
+    assert _check_mesh(sample=None) == 2000
+
+
+def test_pinch_points_are_passable_only_in_the_closed_convention() -> None:
+    # two squares touching at one corner: a path through the corner exists only when
+    # pinch points are part of the free space
+    two = shapely.union_all([box(0, 0, 1, 1), box(1, 1, 2, 2)])
+    closed = VisibilityGraph.from_geometry(two).shortest_path([0.5, 0.5], [1.5, 1.5])
+    assert closed.length == pytest.approx(2**0.5)
+    opened = VisibilityGraph.from_geometry(two, through_pinch_points=False)
+    assert not opened.shortest_path([0.5, 0.5], [1.5, 1.5]).found

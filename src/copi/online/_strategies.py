@@ -84,7 +84,7 @@ class Route:
 
     def _sees(self, p: NDArray[np.float64], q: NDArray[np.float64]) -> bool:
         g = self.graph
-        return bool(segment_free(p[0], p[1], q[0], q[1], g.xy, g.starts, g.eps))
+        return bool(segment_free(p[0], p[1], q[0], q[1], g.xy, g.starts, g.eps, g.pins))
 
     def _inside(self, p: NDArray[np.float64]) -> NDArray[np.float64]:
         """p itself, or its nearest point of the (polygonal) free space when p lies in the

@@ -182,13 +182,17 @@ def point_free(px, py, xy, starts, eps):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
-def segment_free(ax, ay, bx, by, xy, starts, eps):  # type: ignore[no-untyped-def]
-    """Whether the segment ab lies in the closed free space.
+def segment_free(ax, ay, bx, by, xy, starts, eps, pins):  # type: ignore[no-untyped-def]
+    """Whether the segment ab lies in the closed free space, touching none of the
+    points ``pins`` (shape (p, 2); see VisibilityGraph's ``through_pinch_points``).
 
     Rejected at once if it properly crosses a boundary edge. Otherwise it is cut at every
     boundary vertex it touches, and each piece's midpoint must be free: a piece between
     consecutive touch points crosses no edge, so it is free or blocked as a whole.
     """
+    for k in range(pins.shape[0]):
+        if _on_segment(pins[k, 0], pins[k, 1], ax, ay, bx, by, eps):
+            return False
     dx = bx - ax
     dy = by - ay
     length = math.sqrt(dx * dx + dy * dy)
@@ -288,7 +292,7 @@ def _tangent(xy, prev, nxt, v, wx, wy):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
-def visibility_edges(xy, starts, reflex, eps):  # type: ignore[no-untyped-def]
+def visibility_edges(xy, starts, reflex, eps, pins):  # type: ignore[no-untyped-def]
     """Edges (i, j, length) of the reduced visibility graph among ``reflex`` vertices:
     tangent at both ends and inside the closed free space."""
     n = xy.shape[0]
@@ -306,7 +310,7 @@ def visibility_edges(xy, starts, reflex, eps):  # type: ignore[no-untyped-def]
                 continue
             if not _tangent(xy, prev, nxt, j, xy[i, 0], xy[i, 1]):
                 continue
-            if not segment_free(xy[i, 0], xy[i, 1], xy[j, 0], xy[j, 1], xy, starts, eps):
+            if not segment_free(xy[i, 0], xy[i, 1], xy[j, 0], xy[j, 1], xy, starts, eps, pins):
                 continue
             if m == cap:
                 cap *= 2
@@ -323,7 +327,7 @@ def visibility_edges(xy, starts, reflex, eps):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
-def visible_from(px, py, xy, starts, reflex, eps):  # type: ignore[no-untyped-def]
+def visible_from(px, py, xy, starts, reflex, eps, pins):  # type: ignore[no-untyped-def]
     """Which reflex vertices a free point sees along a segment tangent at the vertex."""
     n = xy.shape[0]
     prev, nxt = ring_neighbours(starts, n)
@@ -332,7 +336,7 @@ def visible_from(px, py, xy, starts, reflex, eps):  # type: ignore[no-untyped-de
         i = reflex[a]
         if not _tangent(xy, prev, nxt, i, px, py):
             continue
-        out[a] = segment_free(px, py, xy[i, 0], xy[i, 1], xy, starts, eps)
+        out[a] = segment_free(px, py, xy[i, 0], xy[i, 1], xy, starts, eps, pins)
     return out
 
 

@@ -85,10 +85,25 @@ class VisibilityGraph:
     weights: NDArray[np.float64] = field(repr=False)
     eps: float = field(repr=False)
     """Absolute tolerance of the geometric predicates, scaled to the coordinates."""
+    pins: NDArray[np.float64] = field(repr=False, default_factory=lambda: np.zeros((0, 2)))
+    """Points no path may touch (the pinch points, unless paths may go through them)."""
 
     @classmethod
-    def from_geometry(cls, geometry: BaseGeometry) -> VisibilityGraph:
-        """Build the graph of a Shapely (Multi)Polygon free space."""
+    def from_geometry(
+        cls, geometry: BaseGeometry, *, through_pinch_points: bool = True
+    ) -> VisibilityGraph:
+        """Build the graph of a Shapely (Multi)Polygon free space.
+
+        Parameters
+        ----------
+        geometry : shapely Polygon or MultiPolygon
+        through_pinch_points : bool
+            Where the free space touches itself at a single point (two parts meeting
+            at a vertex, or a hole touching the outer ring), whether a path may pass
+            through that point. True is the closed free space of the rest of copi (and
+            of extremitypathfinder); False treats such points as walls, as a navigation
+            mesh does when faces only share a vertex (the Iron Harvest benchmark).
+        """
         if not isinstance(geometry, BaseGeometry):
             raise InvalidArgumentError(
                 f"free space must be a Shapely polygon; got {type(geometry).__name__}"
@@ -103,9 +118,17 @@ class VisibilityGraph:
         starts = np.concatenate([[0], np.cumsum([len(r) for r in rings])]).astype(np.int64)
         scale = max(1.0, float(np.abs(xy).max())) if len(xy) else 1.0
         eps = 1e-9 * scale
+        pins = np.zeros((0, 2))
+        if len(xy) and not through_pinch_points:
+            # vertices met twice along the rings: where the free space touches itself
+            _, first, count = np.unique(xy, axis=0, return_index=True, return_counts=True)
+            pins = np.ascontiguousarray(xy[first[count > 1]])
         if len(xy):
             nodes = _kernels.reflex_vertices(xy, starts)
-            ei, ej = _kernels.visibility_edges(xy, starts, nodes, eps)
+            if len(pins):
+                pinned = (np.abs(xy[nodes][:, None, :] - pins[None]).max(-1) <= eps).any(1)
+                nodes = np.ascontiguousarray(nodes[~pinned])
+            ei, ej = _kernels.visibility_edges(xy, starts, nodes, eps, pins)
         else:
             nodes = np.zeros(0, dtype=np.int64)
             ei = ej = np.zeros(0, dtype=np.int64)
@@ -128,6 +151,7 @@ class VisibilityGraph:
             indices=np.ascontiguousarray(dst[order]),
             weights=np.ascontiguousarray(wt[order]),
             eps=eps,
+            pins=pins,
         )
 
     @property
@@ -167,9 +191,10 @@ class VisibilityGraph:
         s = self._free_point(s0, "start", snap)
         g = self._free_point(g0, "goal", snap)
         pts = self.points
-        s_vis = _kernels.visible_from(s[0], s[1], self.xy, self.starts, self.nodes, self.eps)
-        g_vis = _kernels.visible_from(g[0], g[1], self.xy, self.starts, self.nodes, self.eps)
-        direct = bool(_kernels.segment_free(s[0], s[1], g[0], g[1], self.xy, self.starts, self.eps))
+        xy, st, eps, pins = self.xy, self.starts, self.eps, self.pins
+        s_vis = _kernels.visible_from(s[0], s[1], xy, st, self.nodes, eps, pins)
+        g_vis = _kernels.visible_from(g[0], g[1], xy, st, self.nodes, eps, pins)
+        direct = bool(_kernels.segment_free(s[0], s[1], g[0], g[1], xy, st, eps, pins))
         length, parent = _kernels.graph_astar(
             np.ascontiguousarray(pts),
             self.indptr,

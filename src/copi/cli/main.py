@@ -8,8 +8,9 @@ from __future__ import annotations
 
 import re
 import sys
+from collections.abc import Callable
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated, Any, TypeVar
 
 import numpy as np
 import typer
@@ -18,6 +19,8 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from rich.table import Table
 
 from copi.errors import CopiError
+
+T = TypeVar("T")
 
 app = typer.Typer(
     name="copi",
@@ -43,6 +46,13 @@ def progress() -> Progress:
         console=console,
         transient=True,
     )
+
+
+def _with_progress(label: str, total: int, run: Callable[[Callable[[int, int], None]], T]) -> T:
+    """``run(report)`` under a progress bar that ``report(done, total)`` advances."""
+    with progress() as bar:
+        task = bar.add_task(label, total=total)
+        return run(lambda done, _total: bar.update(task, completed=done))
 
 
 def safe_name(name: str) -> str:
@@ -375,15 +385,13 @@ def evaluate_command(
         continual=continual,
     )
     output.parent.mkdir(parents=True, exist_ok=True)
-    with progress() as bar:
-        task = bar.add_task(f"{method}: episodes", total=worlds)
-        run_id = evaluate(
-            config,
-            output,
-            workers=workers,
-            scheduler=scheduler,
-            progress=lambda done, total: bar.update(task, completed=done),
-        )
+    run_id = _with_progress(
+        f"{method}: episodes",
+        worlds,
+        lambda report: evaluate(
+            config, output, workers=workers, scheduler=scheduler, progress=report
+        ),
+    )
     with ResultsStore(output) as store:
         s = summarize(store.episodes(run_id))
     out.print(
@@ -423,15 +431,13 @@ def pursuit_command(
         seed=seed, horizon=horizon,
     )  # fmt: skip
     output.parent.mkdir(parents=True, exist_ok=True)
-    with progress() as bar:
-        task = bar.add_task(f"{config.method}: games", total=games)
-        run_id = pursue(
-            config,
-            output,
-            workers=workers,
-            scheduler=scheduler,
-            progress=lambda done, total: bar.update(task, completed=done),
-        )
+    run_id = _with_progress(
+        f"{config.method}: games",
+        games,
+        lambda report: pursue(
+            config, output, workers=workers, scheduler=scheduler, progress=report
+        ),
+    )
     with ResultsStore(output) as store:
         s = summarize_games(store.games(run_id))
     out.print(

@@ -193,3 +193,16 @@ def test_evaluate_report_and_bad_inputs(tmp_path: Path, capsys: pytest.CaptureFi
         ["report", str(tmp_path / "missing.sqlite"), "-o", str(tmp_path / "q")], capsys
     )
     assert code == 2 and "no such results file" in err
+
+
+def test_pursuit_command(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    caps = tmp_path / "caps.npz"
+    run(["learn", "-o", str(caps), "--worlds", "8", "--steps", "150"], capsys)
+    results = tmp_path / "g.sqlite"
+    code, out, err = run(
+        ["pursuit", str(caps), "-o", str(results), "--games", "3", "--horizon", "60", "--static"],
+        capsys,
+    )
+    assert code == 0 and "capability-static: 3 games" in out, err
+    code, _, err = run(["pursuit", str(caps), "-o", str(results), "--evader", "ghost"], capsys)
+    assert code == 2 and "evader must be 'capability' or 'game'" in err and "Traceback" not in err

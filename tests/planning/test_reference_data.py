@@ -176,3 +176,17 @@ def test_pinch_points_are_passable_only_in_the_closed_convention() -> None:
     assert closed.length == pytest.approx(2**0.5)
     opened = VisibilityGraph.from_geometry(two, through_pinch_points=False)
     assert not opened.shortest_path([0.5, 0.5], [1.5, 1.5]).found
+
+
+def test_bad_mesh_files_are_refused(tmp_path: Path) -> None:
+    from copi.errors import MapFileError
+    from copi.planning.mesh import read_mesh
+
+    (tmp_path / "a.mesh").write_text("mesh\n2\n")
+    with pytest.raises(MapFileError, match="expected 'mesh' and version '3' first"):
+        read_mesh(tmp_path / "a.mesh")
+    (tmp_path / "b.mesh").write_text("mesh\n3\n3 1\n0 0\n1 0\n")
+    with pytest.raises(MapFileError, match="malformed mesh"):
+        read_mesh(tmp_path / "b.mesh")
+    with pytest.raises(MapFileError, match="cannot read"):
+        read_mesh(tmp_path / "missing.mesh")

@@ -76,3 +76,18 @@ def test_obstacles_start_clear_of_walls_and_agent(seed: int) -> None:
     assert 10 <= len(r) <= 15 and ((r >= 0.5) & (r <= 1.0)).all()
     assert (w.clearance(c) >= r).all() and w.contains(c).all()
     assert (np.hypot(*(c - s).T) > r + 1.3).all()
+
+
+def test_a_fixed_start_gets_a_goal_it_can_reach() -> None:
+    # two rooms joined by nothing: the goal must be drawn in the start's room
+    from copi.world import World
+
+    rooms = World(
+        [[0, 0], [30, 0], [30, 10], [0, 10]],
+        [[[14, 0.1], [16, 0.1], [16, 9.9], [14, 9.9]]],
+        name="two-rooms",
+    )
+    rooms = rooms.replace(start=[2.0, 5.0])
+    for seed in range(20):
+        _, goal = sample_start_goal(rooms, seed, radius=0.3, min_distance=5.0)
+        assert goal[0] < 14  # the left room: the gap of 0.1 at the walls is too narrow

@@ -98,9 +98,12 @@ def random_world(
     return World(np.round(pts, 6), name=name or f"random-{n}gon")
 
 
-def _free_component(world: World, radius: float, rng: np.random.Generator) -> Polygon:
-    """A connected component of the free space eroded by ``radius`` (configuration space),
-    chosen with probability proportional to its area."""
+def _free_component(
+    world: World, radius: float, rng: np.random.Generator, containing: FloatArray | None = None
+) -> Polygon:
+    """A connected component of the free space eroded by ``radius`` (configuration space):
+    the one holding ``containing`` if given (or the nearest to it), else one chosen with
+    probability proportional to its area."""
     free = world.polygon.buffer(-radius, quad_segs=8)
     parts = list(free.geoms) if isinstance(free, MultiPolygon) else [free]
     parts = [g for g in parts if isinstance(g, Polygon) and g.area > 0]
@@ -108,6 +111,9 @@ def _free_component(world: World, radius: float, rng: np.random.Generator) -> Po
         raise InvalidWorldError(
             f"world {world.name!r}: no free space for a disc of radius {radius:g}"
         )
+    if containing is not None:
+        point = shapely.points(containing)
+        return parts[int(np.argmin([g.distance(point) for g in parts]))]
     areas = np.array([g.area for g in parts])
     return parts[int(rng.choice(len(parts), p=areas / areas.sum()))]
 
@@ -164,9 +170,9 @@ def sample_start_goal(
     rng = as_generator(seed)
     if world.start is not None and world.goal is not None:
         return world.start.copy(), world.goal.copy()
-    region = _free_component(world, radius, rng)
-    margin = radius + 1e-6
     fixed = world.start if world.start is not None else world.goal
+    region = _free_component(world, radius, rng, containing=fixed)
+    margin = radius + 1e-6
     for _ in range(20):
         cand = _sample_in(region, world.segments, margin, rng, 64)
         if len(cand) < 2:

@@ -15,6 +15,7 @@ import numpy as np
 
 from copi.errors import CopiError, InvalidArgumentError
 from copi.experiments._runs import RunIdentity, run_into_store
+from copi.geometry._arrays import positive_int
 from copi.learning import Capabilities
 from copi.online import ContextController, make_strategy
 from copi.planning import shortest_path
@@ -56,9 +57,7 @@ class NavigationConfig(RunIdentity):
 
     def __post_init__(self) -> None:
         for name in ("worlds", "max_steps"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or int(v) != v or v < 1:
-                raise InvalidArgumentError(f"{name} must be a positive int; got {v!r}")
+            positive_int(getattr(self, name), name)
         if self.strategy not in ("route", "greedy"):
             raise InvalidArgumentError(
                 f"strategy must be 'route' or 'greedy'; got {self.strategy!r}"

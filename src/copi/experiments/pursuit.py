@@ -15,6 +15,7 @@ from copi.experiments._runs import RunIdentity, run_into_store
 from copi.experiments.navigation import _capabilities
 from copi.games import ChauffeurParams
 from copi.games._world_game import ChauffeurGame
+from copi.geometry._arrays import positive_int
 from copi.online import ContextController
 from copi.world import RangeSensor
 
@@ -55,9 +56,7 @@ class PursuitConfig(RunIdentity):
                 f"evader must be 'capability' or 'game'; got {self.evader!r}"
             )
         for name in ("games", "horizon"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or int(v) != v or v < 1:
-                raise InvalidArgumentError(f"{name} must be a positive int; got {v!r}")
+            positive_int(getattr(self, name), name)
         self.params()  # validates gamma and the radii
 
     @property

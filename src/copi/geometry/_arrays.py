@@ -88,6 +88,17 @@ def positive(value: Any, name: str) -> float:
     return v
 
 
+def positive_int(value: Any, name: str) -> int:
+    """``value`` as an int >= 1 (bools refused)."""
+    try:
+        ok = not isinstance(value, bool) and int(value) == value and value >= 1
+    except (TypeError, ValueError):
+        ok = False
+    if not ok:
+        raise InvalidArgumentError(f"{name} must be a positive int; got {value!r}")
+    return int(value)
+
+
 def check_finite(arr: NDArray[Any], name: str) -> None:
     """Raise if ``arr`` holds NaN or infinity, naming the first bad index."""
     bad = ~np.isfinite(arr)

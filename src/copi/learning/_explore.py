@@ -10,7 +10,7 @@ from multiprocessing import get_context
 import numpy as np
 from numpy.typing import NDArray
 
-from copi.errors import InvalidArgumentError
+from copi.geometry._arrays import positive_int
 from copi.world import RandomWalk, RangeSensor, Simulator, WorldParams, random_world
 
 __all__ = ["Exploration", "explore"]
@@ -74,8 +74,7 @@ def explore(
     ((10, 32), [0, 0, 0, 0, 0, 1, 1, 1, 1, 1])
     """
     for name, value in (("n_worlds", n_worlds), ("steps", steps), ("workers", workers)):
-        if int(value) != value or value < 1:
-            raise InvalidArgumentError(f"{name} must be a positive int; got {value!r}")
+        positive_int(value, name)
     params = params or WorldParams()
     sensor = sensor or RangeSensor()
     parts: list[tuple[NDArray[np.float64], NDArray[np.float64]]] = []

@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from copi.errors import InvalidArgumentError
+from copi.geometry._arrays import positive_int
 from copi.learning._capabilities import Capabilities
 from copi.learning._explore import explore
 from copi.learning._gng import GrowingNeuralGas
@@ -60,9 +61,7 @@ class LearnParams:
 
     def __post_init__(self) -> None:
         for name in ("worlds", "steps", "workers", "n_rays", "epochs"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or int(v) != v or v < 1:
-                raise InvalidArgumentError(f"{name} must be a positive int; got {v!r}")
+            positive_int(getattr(self, name), name)
         if self.learner not in ("astar", "value-iteration"):
             raise InvalidArgumentError(
                 f"learner must be 'astar' or 'value-iteration'; got {self.learner!r}"

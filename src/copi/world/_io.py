@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 from collections.abc import Iterable
 from json.decoder import JSONArray, JSONObject  # type: ignore[attr-defined]
 from json.scanner import py_make_scanner  # type: ignore[attr-defined]
 from pathlib import Path
 from typing import Any
 
+from copi._files import atomic_write
 from copi.errors import CopiError, InvalidWorldError, WorldFileError
 from copi.world._world import World
 
@@ -76,22 +76,8 @@ def save_worlds(worlds: World | Iterable[World], path: str | os.PathLike[str]) -
     p = Path(path)
     if p.parent and not p.parent.exists():
         raise WorldFileError(f"{p}: directory {p.parent} does not exist")
-    text = json.dumps([w.to_dict() for w in items], indent=1)
-    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent or ".")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text + "\n")
-        os.chmod(tmp, 0o666 & ~_umask())
-        os.replace(tmp, p)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
+    text = json.dumps([w.to_dict() for w in items], indent=1) + "\n"
+    atomic_write(p, lambda fh: fh.write(text.encode("utf-8")))
 
 
 class _Node:

@@ -185,10 +185,26 @@ def test_evaluate_report_and_bad_inputs(tmp_path: Path, capsys: pytest.CaptureFi
     code, _, err = run(["evaluate", str(broken), "-o", str(tmp_path / "b.sqlite")], capsys)
     assert code == 2 and "not a complete .npz archive" in err
     assert not (tmp_path / "b.sqlite").exists()
-    code, _, err = run(
-        ["evaluate", str(caps), "-o", str(tmp_path / "x.sqlite"), "--strategy", "astar"], capsys
-    )
-    assert code == 2 and "strategy must be 'route' or 'greedy'" in err
+    for bad, message in [
+        (["--method", "astar"], "method must be one of copi-faithful, copi-extended, straight"),
+        (["--sensing", "psychic"], "sensing level must be one of sensor, map, oracle; got 'psychic'"),
+        (["--method", "replan", "--sensing", "map"],
+         "replan needs sensing level 'oracle' or above; asked to run at 'map'"),
+        (["--family", "moon"], "family must be one of"),
+    ]:
+        code, _, err = run(
+            ["evaluate", str(caps), "-o", str(tmp_path / "x.sqlite"), *bad], capsys
+        )
+        assert code == 2 and message in err and "Traceback" not in err, err
+        assert not (tmp_path / "x.sqlite").exists()
+    code, _, err = run(["evaluate", "-o", str(tmp_path / "y.sqlite")], capsys)
+    assert code == 2 and "copi-faithful needs a capabilities file" in err
+    code, out, err = run(
+        ["evaluate", "--method", "dwa", "-o", str(tmp_path / "d.sqlite"), "--worlds", "2",
+         "--max-steps", "100"],
+        capsys,
+    )  # fmt: skip
+    assert code == 0 and "dwa (map): 2 episodes" in out, err
     code, _, err = run(
         ["report", str(tmp_path / "missing.sqlite"), "-o", str(tmp_path / "q")], capsys
     )

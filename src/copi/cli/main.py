@@ -341,25 +341,42 @@ def figures_command(
 
 @app.command("evaluate")
 def evaluate_command(
-    capabilities: Annotated[Path, typer.Argument(help="Capabilities file (.npz).")],
-    output: Annotated[Path, typer.Option("-o", "--output", help="Results file (SQLite).")],
+    capabilities: Annotated[
+        Path | None,
+        typer.Argument(help="Capabilities file (.npz); needed by copi's methods only."),
+    ] = None,
+    output: Annotated[
+        Path | None, typer.Option("-o", "--output", help="Results file (SQLite).")
+    ] = None,
+    method: Annotated[
+        str, typer.Option("--method", help="copi-faithful, copi-extended or a baseline.")
+    ] = "copi-faithful",
     worlds: Annotated[int, typer.Option("--worlds", min=1, help="Episodes (paper: 1549).")] = 1549,
+    family: Annotated[str, typer.Option("--family", help="World family.")] = "star",
+    sensing: Annotated[
+        str, typer.Option("--sensing", help="sensor, map or oracle.")
+    ] = "map",
     world_file: Annotated[
-        Path | None, typer.Option("--world-file", help="Run these worlds instead of random ones.")
+        Path | None, typer.Option("--world-file", help="Run these worlds instead of a family.")
     ] = None,
     seed: Annotated[int, typer.Option("--seed", min=0, help="Seed of the episodes.")] = 0,
     workers: Annotated[int, typer.Option("--workers", min=1, help="Local processes.")] = 1,
     scheduler: Annotated[
         str | None, typer.Option("--scheduler", help="Dask scheduler tcp://HOST:PORT instead.")
     ] = None,
-    strategy: Annotated[str, typer.Option("--strategy", help="route or greedy.")] = "route",
     max_steps: Annotated[int, typer.Option("--max-steps", min=1, help="Step limit.")] = 1000,
-    method: Annotated[str, typer.Option("--method", help="Label of this method.")] = "copi",
     guard: Annotated[
-        float, typer.Option("--guard", min=0.0, help="Check candidates against the live reading.")
-    ] = 0.0,
+        float | None,
+        typer.Option("--guard", min=0.0, help="Guard of copi's methods (default: the method's)."),
+    ] = None,
     continual: Annotated[
         bool, typer.Option("--continual", help="Learn unfamiliar contexts online.")
+    ] = False,
+    contact_continues: Annotated[
+        bool,
+        typer.Option(
+            "--contact-continues", help="A contact does not end the episode (older behaviour)."
+        ),
     ] = False,
 ) -> None:
     """Experiment 1 (paper §IV): reach goals in dynamic worlds never seen; each episode's
@@ -369,20 +386,24 @@ def evaluate_command(
     from copi.experiments.report import summarize
     from copi.experiments.store import ResultsStore
 
+    if output is None:
+        raise CopiError("evaluate needs -o/--output: the results file to write")
     if world_file is not None:
         from copi.world import load_worlds
 
         load_worlds(world_file)  # a bad file is refused before anything is written
     config = NavigationConfig(
-        capabilities=str(capabilities),
+        capabilities=str(capabilities) if capabilities is not None else None,
         method=method,
         worlds=worlds,
+        family=family,
+        sensing=sensing,
         world_file=str(world_file) if world_file is not None else None,
         seed=seed,
-        strategy=strategy,
         max_steps=max_steps,
         guard=guard,
         continual=continual,
+        end_on_contact=not contact_continues,
     )
     output.parent.mkdir(parents=True, exist_ok=True)
     run_id = _with_progress(
@@ -395,9 +416,10 @@ def evaluate_command(
     with ResultsStore(output) as store:
         s = summarize(store.episodes(run_id))
     out.print(
-        f"{output}: {method}: {s['episodes']} episodes, success {100 * s['success']:.1f} %, "
-        f"contact {100 * s['contact']:.1f} %, timeout {100 * s['timeout']:.1f} %, median excess "
-        f"{100 * s['excess_median']:.1f} %, {s['decisions_per_s']:,.0f} decisions/s"
+        f"{output}: {method} ({sensing}): {s['episodes']} episodes, success "
+        f"{100 * s['success']:.1f} %, collision {100 * s['contact']:.1f} %, timeout "
+        f"{100 * s['timeout']:.1f} %, median excess {100 * s['excess_median']:.1f} %, "
+        f"{s['decisions_per_s']:,.0f} decisions/s"
     )
 
 
@@ -501,7 +523,8 @@ def reproduce_command(
                 bar.update(task, completed=done)
 
             config = NavigationConfig(
-                capabilities=str(caps_path), method=name, worlds=episodes, seed=seed, guard=guard
+                capabilities=str(caps_path), method=f"copi-{name}", worlds=episodes, seed=seed,
+                guard=guard,
             )
             evaluate(config, results, workers=workers, progress=advance)
         caps_path = output / "capabilities-extended.npz"

@@ -20,11 +20,13 @@ class RunIdentity:
     """For a frozen dataclass with ``capabilities`` (a path) and ``capabilities_sha``
     fields: its identity is everything but the path, the file's content hash included."""
 
-    capabilities: str
+    capabilities: str | None
     capabilities_sha: str
 
     def resolved(self) -> Any:
         """The config with the capabilities' content hash (checks the file loads)."""
+        if self.capabilities is None:
+            return self
         Capabilities.load(self.capabilities)
         with open(self.capabilities, "rb") as fh:
             sha = hashlib.sha256(fh.read()).hexdigest()

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import math
 import os
-import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -13,43 +12,57 @@ from typing import Any
 
 import numpy as np
 
-from copi.errors import CopiError, InvalidArgumentError
+from copi.errors import InvalidArgumentError
+from copi.experiments._episode import EpisodeOutcome, optimal_to_goal, run_agent
 from copi.experiments._runs import RunIdentity, run_into_store
+from copi.experiments.methods import make_agent, method_spec
 from copi.geometry._arrays import positive_int
 from copi.learning import Capabilities
-from copi.online import ContextController, make_strategy
-from copi.planning import shortest_path
-from copi.world import RangeSensor, Simulator, World, load_worlds, random_world
+from copi.online import ContextController, check_sensing
+from copi.world import RangeSensor, Simulator, World, load_worlds
+from copi.world._families import check_family, sample_world
 
-__all__ = ["EpisodeResult", "NavigationConfig", "evaluate", "run_episode", "run_episodes"]
+__all__ = [
+    "EpisodeResult",
+    "NavigationConfig",
+    "draw_episode",
+    "evaluate",
+    "result_row",
+    "run_episode",
+    "run_episodes",
+]
 
 
 @dataclass(frozen=True)
 class NavigationConfig(RunIdentity):
     """One evaluation run of Experiment 1: everything that decides its results."""
 
-    capabilities: str
-    """Path of the capabilities file (its content hash, not the path, enters the run id)."""
-    method: str = "copi"
-    """Label of the method in the results (e.g. "faithful", "extended")."""
+    capabilities: str | None
+    """Path of the capabilities file, for copi's modes (its content hash, not the path,
+    enters the run id); None for the baselines."""
+    method: str = "copi-faithful"
+    """The method, by its registered name (:data:`copi.experiments.methods.METHODS`)."""
     worlds: int = 1549
     """Episodes (the paper: 1549 dynamic worlds)."""
     world_file: str | None = None
-    """Worlds to run instead of the paper's random ones (episode k uses world k mod n)."""
+    """Worlds to run instead of the family's (episode k uses world k mod n)."""
+    family: str = "star"
+    """World family of the episodes (:data:`copi.world.FAMILIES`; "star": the paper's)."""
+    sensing: str = "map"
+    """Sensing level the method runs at (sensor, map or oracle; see copi.online)."""
     seed: int = 0
     """Episode k draws world, task and obstacles from default_rng([seed, k])."""
-    strategy: str = "route"
-    """Global strategy: "route" (knows the static world) or "greedy" (knows the goal)."""
     max_steps: int = 1000
     """Steps before an episode times out."""
     agent_radius: float = 0.3
     """Radius of the disc agent."""
-    guard: float = 0.0
-    """The controller's guard (0: the paper's chain; see ContextController). With the
-    route strategy, which knows the static map, the guard is told what the map alone
-    would show, so that only moving obstacles count as hazards."""
+    guard: float | None = None
+    """copi's and compass-guard's guard (None: the method's registered value; 0: none)."""
     continual: bool = False
-    """Grow contexts for unfamiliar readings online."""
+    """Grow contexts for unfamiliar readings online (copi's modes)."""
+    end_on_contact: bool = True
+    """A contact with a moving obstacle ends the episode (a collision); False goes on
+    (the episode still counts as a collision)."""
     record: int = 8
     """Episodes (the first ones) whose trajectories are stored for figures."""
     capabilities_sha: str = field(default="", compare=False)
@@ -58,10 +71,23 @@ class NavigationConfig(RunIdentity):
     def __post_init__(self) -> None:
         for name in ("worlds", "max_steps"):
             positive_int(getattr(self, name), name)
-        if self.strategy not in ("route", "greedy"):
-            raise InvalidArgumentError(
-                f"strategy must be 'route' or 'greedy'; got {self.strategy!r}"
-            )
+        spec = method_spec(self.method)
+        check_sensing(self.sensing, spec.sensing, method=self.method)
+        if spec.capabilities is not None and self.capabilities is None:
+            raise InvalidArgumentError(f"{self.method} needs a capabilities file")
+        if self.world_file is None:
+            check_family(self.family)
+        if self.guard is not None and not (math.isfinite(self.guard) and self.guard >= 0):
+            raise InvalidArgumentError(f"guard must be a finite number >= 0; got {self.guard!r}")
+
+    def agent_params(self) -> dict[str, Any]:
+        """The method's parameters as this run sets them."""
+        p = dict(method_spec(self.method).params)
+        if self.guard is not None and "guard" in p:
+            p["guard"] = self.guard
+        if method_spec(self.method).capabilities is not None:
+            p["continual"] = self.continual
+        return p
 
 
 @dataclass(frozen=True)
@@ -72,26 +98,39 @@ class EpisodeResult:
     world: str
     seed: int
     success: bool
-    """Reached the goal within the step limit without touching anything."""
+    """Reached the goal within the step limit without touching a moving obstacle."""
     reached: bool
     collided: bool
+    """Touched a moving obstacle (exclusive of success and timeout)."""
     timed_out: bool
+    """Neither reached the goal nor touched anything within the step limit."""
     steps: int
     contacts: int
-    """Steps with a contact (the episode goes on after one)."""
+    """Steps with a contact (at most 1 when contacts end episodes)."""
     path_length: float
     optimal_length: float
-    """Shortest path on the snapshot at t = 0 with obstacles frozen (inf: none)."""
+    """Lower bound (within 0.12 %) on the shortest path to the goal's tolerance disc on
+    the snapshot at t = 0 with obstacles frozen (NaN: none)."""
     excess: float
-    """path_length / optimal_length - 1 when the goal was reached (NaN otherwise)."""
+    """path_length / optimal_length - 1 on success (>= 0), NaN otherwise."""
     decision_us: float
-    """Mean wall time of one online decision (the controller's chain), microseconds."""
+    """Mean wall time of one decision (global direction and local choice), µs."""
     strategy_us: float
-    """Mean wall time of the global strategy's aim per step, microseconds."""
+    """Kept for older readers: 0 (the decision time includes the global direction)."""
     unfamiliar: float
-    """Share of this episode's decisions whose reading was unfamiliar."""
+    """Share of this episode's decisions whose reading was unfamiliar (copi's modes)."""
     no_policy: int
-    """Steps at which the context offered no policy (the agent stood still)."""
+    """Steps at which the method commanded no motion."""
+    family: str = "star"
+    sensing: str = "map"
+    outcome: str = "timeout"
+    """success, collision or timeout (exclusive)."""
+    time_to_goal: float = math.nan
+    """Steps to the goal on success."""
+    min_clearance: float = math.nan
+    """Least surface distance to a moving obstacle over the episode."""
+    smoothness: float = math.nan
+    """Sum of turning angles between consecutive moves, radians."""
     trajectory: dict[str, Any] | None = None
     """For recorded episodes: world, path, obstacle traces and radii (JSON-able)."""
 
@@ -110,88 +149,107 @@ def _world_list(path: str) -> tuple[World, ...]:
     return tuple(load_worlds(path))
 
 
-def run_episode(config: NavigationConfig, k: int) -> EpisodeResult:
-    """Episode k of a run: draw the task, measure the optimum on the frozen snapshot,
-    then run the agent online. Depends only on (config, k)."""
-    caps = _capabilities(config.capabilities, config.capabilities_sha)
-    rng = np.random.default_rng([config.seed, k])
-    if config.world_file is not None:
-        worlds = _world_list(config.world_file)
+def draw_episode(
+    family: str,
+    k: int,
+    seed: int,
+    *,
+    world_file: str | None = None,
+    agent_radius: float = 0.3,
+    n_rays: int = 32,
+    max_range: float = 10.0,
+    record: bool = False,
+) -> Simulator:
+    """Episode k's world, task and obstacles, all from default_rng([seed, k]): the same
+    for every method, so that methods can be compared episode by episode."""
+    rng = np.random.default_rng([seed, k])
+    if world_file is not None:
+        worlds = _world_list(world_file)
         world = worlds[k % len(worlds)]
     else:
-        world = random_world(rng, name=f"random-{k:05d}")
-    sensor = RangeSensor(caps.n_rays, float(caps.params.get("max_range", 10.0)))
-    sim = Simulator.from_world(
-        world, rng, agent_radius=config.agent_radius, sensor=sensor, record=k < config.record
+        world = sample_world(family, rng, name=f"{family}-{k:05d}")
+    sensor = RangeSensor(n_rays, max_range)
+    return Simulator.from_world(
+        world, rng, agent_radius=agent_radius, sensor=sensor, record=record
     )
-    start = sim.position.copy()
-    try:
-        optimal = shortest_path(
-            world, start, sim.goal, radius=config.agent_radius, centers=sim.centers, radii=sim.radii
-        ).length
-    except CopiError:
-        optimal = math.nan
-    controller = ContextController(caps, guard=config.guard, continual=config.continual)
-    knows_map = config.guard > 0 and config.strategy == "route"
-    strategy = make_strategy(config.strategy)
-    strategy.reset(world, start, sim.goal, config.agent_radius)
-    length = 0.0
-    contacts = 0
-    no_policy = 0
-    reached = False
-    t_decide = 0.0
-    t_aim = 0.0
-    steps = 0
-    clock = time.perf_counter
-    while steps < config.max_steps:
-        steps += 1
-        t0 = clock()
-        desired, reach = strategy.aim(sim.position)
-        static = sensor.scan(world, sim.position) if knows_map else None
-        t1 = clock()
-        action, _ = controller.decide(sim.ranges, desired, reach=reach, static=static)
-        t2 = clock()
-        t_aim += t1 - t0
-        t_decide += t2 - t1
-        if action[0] == 0.0 and action[1] == 0.0:
-            no_policy += 1
-        x, y = sim.position
-        res = sim.step(action)
-        length += math.hypot(sim.position[0] - x, sim.position[1] - y)
-        contacts += res.contact
-        if res.reached:
-            reached = True
-            break
+
+
+def result_row(
+    sim: Simulator,
+    k: int,
+    seed: int,
+    optimal: float,
+    out: EpisodeOutcome,
+    *,
+    family: str,
+    sensing: str,
+) -> EpisodeResult:
+    """The stored row of one agent's episode (``sim`` after the episode)."""
+    success = out.outcome == "success"
     excess = (
-        length / optimal - 1 if reached and math.isfinite(optimal) and optimal > 0 else math.nan
+        out.path_length / optimal - 1 if success and math.isfinite(optimal) and optimal > 0
+        else math.nan
     )
     trajectory = None
     if sim.record:
         trajectory = {
-            "world": world.to_dict(),
+            "world": sim.world.to_dict(),
             "path": np.asarray(sim.path).round(4).tolist(),
             "traces": np.asarray(sim.traces).round(4).tolist(),
             "radii": sim.radii.tolist(),
             "goal": sim.goal.tolist(),
+            "outcome": out.outcome,
         }
     return EpisodeResult(
         episode=k,
-        world=world.name,
-        seed=config.seed,
-        success=reached and contacts == 0,
-        reached=reached,
-        collided=contacts > 0,
-        timed_out=not reached,
-        steps=steps,
-        contacts=contacts,
-        path_length=length,
+        world=sim.world.name,
+        seed=seed,
+        success=success,
+        reached=out.reached,
+        collided=out.outcome == "collision",
+        timed_out=out.outcome == "timeout",
+        steps=out.steps,
+        contacts=out.contacts,
+        path_length=out.path_length,
         optimal_length=optimal,
         excess=excess,
-        decision_us=1e6 * t_decide / steps,
-        strategy_us=1e6 * t_aim / steps,
-        unfamiliar=controller.unfamiliar_rate,
-        no_policy=no_policy,
+        decision_us=out.decision_us,
+        strategy_us=0.0,
+        unfamiliar=float(out.counters.get("unfamiliar", 0.0)),
+        no_policy=out.no_policy,
+        family=family,
+        sensing=sensing,
+        outcome=out.outcome,
+        time_to_goal=out.time_to_goal,
+        min_clearance=out.min_clearance,
+        smoothness=out.smoothness,
         trajectory=trajectory,
+    )
+
+
+def run_episode(config: NavigationConfig, k: int) -> EpisodeResult:
+    """Episode k of a run: draw the task, measure the optimum on the frozen snapshot,
+    then run the method online. Depends only on (config, k)."""
+    spec = method_spec(config.method)
+    caps = None
+    n_rays, max_range = 32, 10.0
+    if spec.capabilities is not None:
+        assert config.capabilities is not None
+        caps = _capabilities(config.capabilities, config.capabilities_sha)
+        n_rays, max_range = caps.n_rays, float(caps.params.get("max_range", 10.0))
+    sim = draw_episode(
+        config.family, k, config.seed, world_file=config.world_file,
+        agent_radius=config.agent_radius, n_rays=n_rays, max_range=max_range,
+        record=k < config.record,
+    )  # fmt: skip
+    optimal = optimal_to_goal(sim.world, sim)
+    agent = make_agent(config.method, caps, **config.agent_params())
+    out = run_agent(
+        agent, sim, sensing=config.sensing, max_steps=config.max_steps,
+        end_on_contact=config.end_on_contact,
+    )  # fmt: skip
+    return result_row(
+        sim, k, config.seed, optimal, out, family=config.family, sensing=config.sensing
     )
 
 

@@ -54,6 +54,12 @@ CREATE TABLE IF NOT EXISTS episodes (
     strategy_us REAL,
     unfamiliar REAL,
     no_policy INTEGER,
+    family TEXT,
+    sensing TEXT,
+    outcome TEXT,
+    time_to_goal REAL,
+    min_clearance REAL,
+    smoothness REAL,
     PRIMARY KEY (run_id, method, episode)
 );
 CREATE TABLE IF NOT EXISTS games (
@@ -90,8 +96,16 @@ GAME_COLUMNS = [
 EPISODE_COLUMNS = [
     "episode", "world", "seed", "success", "reached", "collided", "timed_out", "steps",
     "contacts", "path_length", "optimal_length", "excess", "decision_us", "strategy_us",
-    "unfamiliar", "no_policy",
+    "unfamiliar", "no_policy", "family", "sensing", "outcome", "time_to_goal",
+    "min_clearance", "smoothness",
 ]  # fmt: skip
+
+# Columns added after the first format, with their SQL types: older stores gain them
+# (NULL in their old rows) when opened for writing.
+_ADDED_EPISODE_COLUMNS = {
+    "family": "TEXT", "sensing": "TEXT", "outcome": "TEXT", "time_to_goal": "REAL",
+    "min_clearance": "REAL", "smoothness": "REAL",
+}  # fmt: skip
 
 
 class ResultsError(CopiError):
@@ -145,6 +159,10 @@ class ResultsStore:
             self.db.close()
             raise ResultsError(f"{self.path}: an SQLite file, but not a copi results store")
         self.db.executescript(SCHEMA)
+        have = {r[1] for r in self.db.execute("PRAGMA table_info(episodes)")}
+        for column, kind in _ADDED_EPISODE_COLUMNS.items():
+            if column not in have:
+                self.db.execute(f"ALTER TABLE episodes ADD COLUMN {column} {kind}")
         self.db.commit()
 
     def close(self) -> None:
@@ -160,7 +178,8 @@ class ResultsStore:
 
     def begin(self, run_id: str, experiment: str, method: str, config: dict[str, Any]) -> None:
         """Register a run, or resume it. A different configuration under the same method
-        label is refused (nothing in the file is changed)."""
+        label (and, where the configuration names them, the same family and sensing level)
+        is refused (nothing in the file is changed)."""
         rows = self.db.execute(
             "SELECT run_id, config FROM runs WHERE experiment = ? AND method = ?",
             (experiment, method),
@@ -169,6 +188,8 @@ class ResultsStore:
             if rid == run_id:
                 return
             other = json.loads(text)
+            if any(other.get(k) != config.get(k) for k in ("family", "sensing")):
+                continue
             diff = sorted(k for k in set(other) | set(config) if other.get(k) != config.get(k))
             shown = ", ".join(
                 f"{k}: {other.get(k)!r} there, {config.get(k)!r} now" for k in diff[:3]

@@ -1,8 +1,32 @@
-"""Online policy instantiation (paper §III): the context chain and global strategies."""
+"""Online policy instantiation (paper §III): the context chain, global strategies, and
+the protocol every navigating method answers (:class:`Agent`, at a sensing level)."""
 
 from __future__ import annotations
 
+from copi.online._agent import (
+    SENSING_LEVELS,
+    Agent,
+    CopiAgent,
+    Observation,
+    Steering,
+    Task,
+    check_sensing,
+)
 from copi.online._controller import ContextController, Decision
 from copi.online._strategies import GlobalStrategy, Greedy, Route, make_strategy
 
-__all__ = ["ContextController", "Decision", "GlobalStrategy", "Greedy", "Route", "make_strategy"]
+__all__ = [
+    "SENSING_LEVELS",
+    "Agent",
+    "ContextController",
+    "CopiAgent",
+    "Decision",
+    "GlobalStrategy",
+    "Greedy",
+    "Observation",
+    "Route",
+    "Steering",
+    "Task",
+    "check_sensing",
+    "make_strategy",
+]

@@ -1,0 +1,49 @@
+"""Methods that are not copi's: what copi must beat, run on the same episodes.
+
+Each is an :class:`copi.online.Agent` (``reset(task)``, ``act(obs)``) that declares the
+least sensing level it needs (see :mod:`copi.online`):
+
+==================  ========  ===========================================================
+name                level     what it is
+==================  ========  ===========================================================
+``straight``        sensor    the global direction, no avoidance
+``compass-guard``   sensor    copi's guard over the 16 compass moves, no capabilities
+``vfh``             sensor    Vector Field Histogram (VFH+) on the ranges
+``dwa``             sensor    Dynamic Window (velocity sampling) on the ranges
+``tangent-bug``     sensor    TangentBug on the ranges
+``replan``          oracle    shortest path on the current snapshot, re-planned
+``navground-hrvo``  oracle    navground's HRVO (optional extra ``peers``)
+``navground-hl``    oracle    navground's HL (optional extra ``peers``)
+``navground-orca``  oracle    navground's ORCA (optional extra ``peers``)
+==================  ========  ===========================================================
+
+The local methods (level ``sensor``) follow the same global direction as copi's modes
+(:class:`copi.online.Steering`): the static route at ``map``, the goal at ``sensor``.
+"""
+
+from __future__ import annotations
+
+from copi.baselines._dwa import DWA
+from copi.baselines._navground import (
+    NAVGROUND_BEHAVIORS,
+    NavgroundAgent,
+    NavgroundMissingError,
+    navground_available,
+)
+from copi.baselines._replan import Replan
+from copi.baselines._simple import CompassGuard, Straight
+from copi.baselines._tangent_bug import TangentBug
+from copi.baselines._vfh import VFH
+
+__all__ = [
+    "DWA",
+    "NAVGROUND_BEHAVIORS",
+    "VFH",
+    "CompassGuard",
+    "NavgroundAgent",
+    "NavgroundMissingError",
+    "Replan",
+    "Straight",
+    "TangentBug",
+    "navground_available",
+]

@@ -1,0 +1,57 @@
+"""What the baselines share: hit points of a reading, and the steered base class."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+
+from copi.geometry import ring_angles
+from copi.online import Observation, Steering, Task
+
+__all__ = ["Steered", "hit_points", "unit"]
+
+
+def unit(v: NDArray[np.float64]) -> tuple[NDArray[np.float64], float]:
+    """(v / |v|, |v|); the zero vector stays zero."""
+    n = math.hypot(v[0], v[1])
+    return (v / n if n > 0 else np.zeros(2)), n
+
+
+def hit_points(
+    ranges: NDArray[np.float64],
+    cos: NDArray[np.float64],
+    sin: NDArray[np.float64],
+    max_range: float,
+) -> NDArray[np.float64]:
+    """The points the rays hit (those shorter than the range), relative to the agent, (h, 2)."""
+    hit = ranges < max_range
+    return np.column_stack([ranges[hit] * cos[hit], ranges[hit] * sin[hit]])
+
+
+class Steered:
+    """A local method driven by :class:`Steering` (the route at ``map``, the goal at
+    ``sensor``): subclasses turn (observation, desired direction, reach) into a velocity."""
+
+    name = "steered"
+    sensing = "sensor"
+
+    def reset(self, task: Task) -> None:
+        self.task = task
+        self.steering = Steering()
+        self.steering.reset(task)
+        angles = ring_angles(task.n_rays)
+        self.cos = np.cos(angles)
+        self.sin = np.sin(angles)
+        self.max_range = task.max_range
+        self.radius = task.agent_radius
+
+    def act(self, obs: Observation) -> NDArray[np.float64]:
+        desired, reach = self.steering.aim(obs)
+        return self.steer(obs, np.asarray(desired, dtype=np.float64), float(reach))
+
+    def steer(
+        self, obs: Observation, desired: NDArray[np.float64], reach: float
+    ) -> NDArray[np.float64]:
+        raise NotImplementedError

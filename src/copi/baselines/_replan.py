@@ -1,0 +1,128 @@
+"""Re-planning on the current snapshot: the planner that knows everything now and
+nothing of what comes next (level ``oracle``)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+
+from copi.baselines._common import unit
+from copi.errors import CopiError, InvalidArgumentError
+from copi.online import Observation, Task
+from copi.planning import shortest_path
+
+__all__ = ["Replan"]
+
+
+class Replan:
+    """Follow the shortest path on the current snapshot, the moving obstacles frozen and
+    inflated by ``inflate``; re-plan every ``every`` steps and whenever the next stretch
+    of the path (``lookahead`` steps) meets an inflated obstacle. Level ``oracle`` (it
+    sees every obstacle's position, wherever it is); hand-written; ``inflate`` is tuned.
+
+    When the agent stands inside an inflated obstacle, or the goal does, the plan is made
+    with the obstacles at their true size; failing that, the agent steps away from the
+    nearest obstacle.
+
+    Parameters
+    ----------
+    inflate : float
+        Added to each obstacle's radius when planning, agent steps.
+    every : int
+        Steps between two plans at most.
+    lookahead : float
+        Length of path checked each step against the inflated obstacles.
+    quad_segs : int
+        Circles of the configuration space as polygons of 4 ``quad_segs`` sides.
+    """
+
+    name = "replan"
+    sensing = "oracle"
+
+    def __init__(
+        self, *, inflate: float = 0.6, every: int = 5, lookahead: float = 3.0, quad_segs: int = 2
+    ) -> None:
+        if not (math.isfinite(inflate) and inflate >= 0):
+            raise InvalidArgumentError(f"inflate must be a finite number >= 0; got {inflate!r}")
+        self.inflate = float(inflate)
+        self.every = int(every)
+        self.lookahead = float(lookahead)
+        self.quad_segs = int(quad_segs)
+
+    def reset(self, task: Task) -> None:
+        if task.world is None or task.goal is None:
+            raise InvalidArgumentError("replan needs sensing level 'oracle'")
+        self.task = task
+        self.world = task.world
+        self.goal = np.asarray(task.goal, dtype=np.float64)
+        self.path: NDArray[np.float64] | None = None
+        self.age = 0
+        self.plans = 0
+
+    def _plan(self, p: NDArray[np.float64], obstacles: NDArray[np.float64]) -> None:
+        self.plans += 1
+        self.age = 0
+        r = self.task.agent_radius
+        centers, radii = obstacles[:, :2], obstacles[:, 4]
+        for grow in (self.inflate, 0.0):
+            try:
+                plan = shortest_path(
+                    self.world, p, self.goal, radius=r, centers=centers, radii=radii + grow,
+                    quad_segs=self.quad_segs,
+                )  # fmt: skip
+            except CopiError:
+                continue
+            if plan.path is not None:
+                self.path = plan.path[1:]
+                return
+        self.path = None
+
+    def _blocked(self, p: NDArray[np.float64], obstacles: NDArray[np.float64]) -> bool:
+        """Whether the next ``lookahead`` of the path meets an inflated obstacle."""
+        if self.path is None or not len(obstacles):
+            return self.path is None
+        pts = [p]
+        left = self.lookahead
+        for q in self.path:
+            seg = math.dist(pts[-1], q)
+            if seg >= left:
+                u, _ = unit(q - pts[-1])
+                pts.append(pts[-1] + u * left)
+                break
+            pts.append(q)
+            left -= seg
+        a = np.asarray(pts[:-1])
+        b = np.asarray(pts[1:])
+        if not len(a):
+            return False
+        c = obstacles[:, :2]
+        ab = b - a
+        L2 = np.maximum((ab * ab).sum(1), 1e-12)
+        t = np.clip(((c[:, None, :] - a[None]) * ab[None]).sum(-1) / L2[None], 0, 1)
+        d = np.hypot(*(c[:, None, :] - a[None] - t[..., None] * ab[None]).transpose(2, 0, 1))
+        need = obstacles[:, 4] + self.task.agent_radius + 0.5 * self.inflate
+        return bool((d.min(1) < need).any())
+
+    def act(self, obs: Observation) -> NDArray[np.float64]:
+        assert obs.position is not None and obs.obstacles is not None
+        p = np.asarray(obs.position, dtype=np.float64)
+        self.age += 1
+        if self.path is None or self.age >= self.every or self._blocked(p, obs.obstacles):
+            self._plan(p, obs.obstacles)
+        if self.path is None:
+            if not len(obs.obstacles):
+                return np.zeros(2)
+            d = p[None] - obs.obstacles[:, :2]
+            k = int(np.argmin(np.hypot(*d.T) - obs.obstacles[:, 4]))
+            away, _ = unit(d[k])
+            return away
+        while len(self.path) > 1 and math.dist(p, self.path[0]) < 1e-6:
+            self.path = self.path[1:]
+        u, dist = unit(self.path[0] - p)
+        step = min(1.0, dist)
+        if step < 1.0 and len(self.path) > 1:
+            # Take the corner: the rest of the step goes along the next piece.
+            self.path = self.path[1:]
+        return u * step

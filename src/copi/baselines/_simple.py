@@ -1,0 +1,75 @@
+"""The two ablations of copi's own parts: no avoidance at all, and copi's guard without
+any learnt capability."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+
+from copi.baselines._common import Steered, unit
+from copi.errors import InvalidArgumentError
+from copi.online import Observation, Task, _kernels
+
+__all__ = ["CompassGuard", "Straight"]
+
+
+class Straight(Steered):
+    """Follow the global direction at full speed, ignoring every obstacle (walls still
+    stop the agent). Level ``sensor``; nothing learnt, nothing tuned."""
+
+    name = "straight"
+
+    def steer(
+        self, obs: Observation, desired: NDArray[np.float64], reach: float
+    ) -> NDArray[np.float64]:
+        u, _ = unit(desired)
+        return u * min(1.0, reach)
+
+
+class CompassGuard(Steered):
+    """copi's guard and escape (:class:`copi.online.ContextController` with ``guard``)
+    over all compass directions, with no capabilities: every direction is a candidate
+    everywhere. The ablation of the learnt part of ``copi-extended``.
+
+    Level ``sensor``; at ``map`` the static reading tells the guard which hits are walls,
+    as it does for copi. Hand-written; ``guard`` is tuned.
+
+    Parameters
+    ----------
+    guard : float
+        Clearance a step must keep from moving obstacles' hit points (see
+        :class:`copi.online.ContextController`).
+    directions : int
+        Compass directions offered (16: as ``copi-extended``).
+    """
+
+    name = "compass-guard"
+
+    def __init__(self, *, guard: float = 1.2, directions: int = 16) -> None:
+        if not (math.isfinite(guard) and guard > 0):
+            raise InvalidArgumentError(f"guard must be a finite number > 0; got {guard!r}")
+        if int(directions) != directions or directions < 1:
+            raise InvalidArgumentError(f"directions must be a positive int; got {directions!r}")
+        self.guard = float(guard)
+        a = 2 * np.pi * np.arange(int(directions)) / int(directions)
+        self._cand = np.ascontiguousarray(np.column_stack([np.cos(a), np.sin(a)])[None])
+        self._ok = np.ones((1, int(directions)), dtype=np.bool_)
+        self._out = np.empty(5)
+
+    def reset(self, task: Task) -> None:
+        super().reset(task)
+        self._node = np.zeros((1, task.n_rays))
+        self._no_static = np.full(task.n_rays, np.inf)
+
+    def steer(
+        self, obs: Observation, desired: NDArray[np.float64], reach: float
+    ) -> NDArray[np.float64]:
+        static = self._no_static if obs.static is None else obs.static
+        out = self._out
+        _kernels.decide(
+            np.asarray(obs.ranges, dtype=np.float64), static, self._node, self._cand, self._ok,
+            desired[0], desired[1], reach, self.guard, self.cos, self.sin, self.max_range, out,
+        )  # fmt: skip
+        return out[:2].copy()

@@ -1,0 +1,186 @@
+"""Every navigating method by name: copi's modes and the baselines, what each knows, what
+in it is learnt, and its parameters (tuned on validation episodes, see ``TUNING``)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from copi.baselines import (
+    DWA,
+    NAVGROUND_BEHAVIORS,
+    VFH,
+    CompassGuard,
+    NavgroundAgent,
+    NavgroundMissingError,
+    Replan,
+    Straight,
+    TangentBug,
+    navground_available,
+)
+from copi.errors import InvalidArgumentError
+from copi.learning import Capabilities, LearnParams
+from copi.online import SENSING_LEVELS, Agent, CopiAgent, check_sensing
+
+__all__ = [
+    "CAPABILITY_PRESETS",
+    "METHODS",
+    "MethodSpec",
+    "make_agent",
+    "method_spec",
+    "parse_methods",
+]
+
+CAPABILITY_PRESETS: dict[str, LearnParams] = {
+    "faithful": LearnParams(directions=4),
+    "extended": LearnParams(directions=16),
+}
+"""Capabilities each copi mode learns (seed 0 unless told otherwise): the paper's four
+compass policies per template, or sixteen."""
+
+
+@dataclass(frozen=True)
+class MethodSpec:
+    """A method: how to build it, what it needs, what it is."""
+
+    name: str
+    sensing: str
+    """The least sensing level it needs."""
+    levels: tuple[str, ...]
+    """Levels it runs at in the benchmark by default."""
+    summary: str
+    """What it is, learnt versus hand-written."""
+    params: dict[str, Any] = field(default_factory=dict)
+    """Its parameters (tuned values where tuned)."""
+    capabilities: str | None = None
+    """The capability preset it needs (copi's modes), else None."""
+    optional: bool = False
+    """Needs an optional extra (navground)."""
+
+    @property
+    def available(self) -> bool:
+        return not self.optional or navground_available()
+
+
+_MAP_AND_SENSOR = ("sensor", "map")
+
+METHODS: dict[str, MethodSpec] = {
+    spec.name: spec
+    for spec in [
+        MethodSpec(
+            "copi-faithful", "sensor", _MAP_AND_SENSOR,
+            "the paper's chain: learnt contexts, landmarks, symmetry and 4 A* policies per "
+            "template; no hand-written avoidance",
+            {"guard": 0.0}, capabilities="faithful",
+        ),
+        MethodSpec(
+            "copi-extended", "sensor", _MAP_AND_SENSOR,
+            "the chain with 16 policies per template; each candidate checked against the live "
+            "reading by a hand-written guard, which escapes when none is safe",
+            {"guard": 1.2}, capabilities="extended",
+        ),
+        MethodSpec(
+            "straight", "sensor", _MAP_AND_SENSOR,
+            "the global direction, no avoidance (hand-written, nothing tuned)",
+        ),
+        MethodSpec(
+            "compass-guard", "sensor", _MAP_AND_SENSOR,
+            "copi-extended's hand-written guard over 16 compass moves, no capabilities "
+            "(ablation of the learnt part)",
+            {"guard": 1.2},
+        ),
+        MethodSpec(
+            "vfh", "sensor", _MAP_AND_SENSOR,
+            "Vector Field Histogram (VFH+) on the ranges (hand-written)",
+            {"threshold": 0.5, "safety": 0.5},
+        ),
+        MethodSpec(
+            "dwa", "sensor", _MAP_AND_SENSOR,
+            "Dynamic Window: sampled velocities scored on the ranges (hand-written)",
+            {"margin": 0.3, "clearance_weight": 0.3},
+        ),
+        MethodSpec(
+            "tangent-bug", "sensor", _MAP_AND_SENSOR,
+            "TangentBug on the ranges (hand-written)",
+            {"margin": 0.3, "follow": 1.2},
+        ),
+        MethodSpec(
+            "replan", "oracle", ("oracle",),
+            "shortest path on the current snapshot, obstacles inflated, re-planned "
+            "(hand-written; sees every obstacle)",
+            {"inflate": 0.6},
+        ),
+        *[
+            MethodSpec(
+                name, "oracle", ("oracle",),
+                f"navground's {behavior} (sees obstacle positions and velocities)",
+                {"safety_margin": 0.2, "horizon": 5.0}, optional=True,
+            )
+            for name, behavior in NAVGROUND_BEHAVIORS.items()
+        ],
+    ]
+}  # fmt: skip
+"""The registry: copi's modes first, then the baselines and peers."""
+
+DEFAULT_METHODS = tuple(n for n in METHODS if n != "navground-orca")
+"""Methods the benchmark runs unless told otherwise (navground's ORCA is optional)."""
+
+
+def method_spec(name: str) -> MethodSpec:
+    """The spec of a method by name; an unknown name is refused, listing the known ones."""
+    try:
+        return METHODS[name]
+    except KeyError:
+        raise InvalidArgumentError(
+            f"method must be one of {', '.join(METHODS)}; got {name!r}"
+        ) from None
+
+
+def parse_methods(text: str | None) -> list[tuple[str, str]]:
+    """``"dwa,copi-extended@map"`` -> [(method, level), ...]: a bare name stands for
+    every level the method runs at by default; ``name@level`` for one level (checked
+    against what the method needs). None: every default method at its levels."""
+    items = DEFAULT_METHODS if text is None else [t.strip() for t in text.split(",") if t.strip()]
+    if not items:
+        raise InvalidArgumentError("methods must name at least one method; got none")
+    out: list[tuple[str, str]] = []
+    for item in items:
+        name, _, level = item.partition("@")
+        spec = method_spec(name)
+        levels = [level] if level else list(spec.levels)
+        for lv in levels:
+            check_sensing(lv, spec.sensing, method=name)
+            if (name, lv) not in out:
+                out.append((name, lv))
+    order = {n: i for i, n in enumerate(METHODS)}
+    return sorted(out, key=lambda m: (order[m[0]], SENSING_LEVELS.index(m[1])))
+
+
+def make_agent(
+    name: str, capabilities: Capabilities | None = None, **params: Any
+) -> Agent:
+    """A fresh agent of method ``name`` with its registered parameters, updated by
+    ``params``; copi's modes need their ``capabilities``."""
+    spec = method_spec(name)
+    p = {**spec.params, **params}
+    if spec.capabilities is not None:
+        if capabilities is None:
+            raise InvalidArgumentError(f"{name} needs a capabilities file")
+        return CopiAgent(capabilities, name=name, guard=float(p.get("guard", 0.0)),
+                         continual=bool(p.get("continual", False)))  # fmt: skip
+    if spec.optional and not navground_available():
+        raise NavgroundMissingError(
+            f"{name} needs navground, which is not installed: pip install 'copi[peers]'"
+        )
+    factories: dict[str, Any] = {
+        "straight": Straight,
+        "compass-guard": CompassGuard,
+        "vfh": VFH,
+        "dwa": DWA,
+        "tangent-bug": TangentBug,
+        "replan": Replan,
+    }
+    if name in NAVGROUND_BEHAVIORS:
+        return NavgroundAgent(NAVGROUND_BEHAVIORS[name], **p)
+    agent: Agent = factories[name](**p)
+    return agent

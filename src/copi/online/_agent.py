@@ -1,0 +1,197 @@
+"""What an agent is told, and the one protocol every navigating method answers.
+
+The benchmark compares copi with methods that know more or less than it does, so what a
+method knows is explicit. Each episode runs at one *sensing level*, and the runner hands
+the method only what that level contains:
+
+========  ==========================================================================
+level     what the method receives
+========  ==========================================================================
+sensor    the ring of ranges and the goal's position relative to the agent
+map       plus the static world (and so the agent's position in it, the static route,
+          and the reading the static map alone would give, which tells walls apart
+          from moving obstacles)
+oracle    plus every moving obstacle's position, radius and velocity
+========  ==========================================================================
+
+A method declares the least level it needs (:attr:`Agent.sensing`); asking it to run
+below that is an error, and at a higher level it is still handed that level's
+information (it may ignore part of it, as a method of level ``sensor`` does at ``map``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+import numpy as np
+from numpy.typing import NDArray
+
+from copi.errors import InvalidArgumentError
+from copi.learning import Capabilities
+from copi.online._controller import ContextController
+from copi.online._strategies import Greedy, Route
+from copi.world import World
+
+__all__ = [
+    "SENSING_LEVELS",
+    "Agent",
+    "CopiAgent",
+    "Observation",
+    "Steering",
+    "Task",
+    "check_sensing",
+]
+
+SENSING_LEVELS = ("sensor", "map", "oracle")
+"""The sensing levels, from least to most informed."""
+
+
+def check_sensing(level: str, needs: str | None = None, *, method: str = "method") -> int:
+    """The rank of ``level`` (0, 1, 2); refuses an unknown level, or one below ``needs``."""
+    if level not in SENSING_LEVELS:
+        raise InvalidArgumentError(
+            f"sensing level must be one of {', '.join(SENSING_LEVELS)}; got {level!r}"
+        )
+    rank = SENSING_LEVELS.index(level)
+    if needs is not None and rank < check_sensing(needs):
+        raise InvalidArgumentError(
+            f"{method} needs sensing level {needs!r} or above; asked to run at {level!r}"
+        )
+    return rank
+
+
+@dataclass(frozen=True)
+class Task:
+    """What an agent is told when an episode starts, restricted to its sensing level."""
+
+    sensing: str
+    """The level the episode runs at."""
+    agent_radius: float
+    """Radius of the agent's disc, agent steps."""
+    goal_tolerance: float
+    """The goal is reached when the agent's centre is this close to it."""
+    n_rays: int
+    """Rays of the range ring (ray i at angle 2 pi i / n_rays from +x)."""
+    max_range: float
+    """Readings are clipped to this range."""
+    world: World | None = None
+    """The static world (levels ``map`` and ``oracle``; None at ``sensor``)."""
+    start: NDArray[np.float64] | None = None
+    """The start in the world's frame (``map`` and ``oracle``)."""
+    goal: NDArray[np.float64] | None = None
+    """The goal in the world's frame (``map`` and ``oracle``)."""
+
+
+@dataclass(frozen=True)
+class Observation:
+    """What an agent perceives at one step, restricted to its sensing level."""
+
+    ranges: NDArray[np.float64]
+    """The range reading, shape (n_rays,), agent steps (every level)."""
+    goal: NDArray[np.float64]
+    """The goal relative to the agent, shape (2,) (every level)."""
+    position: NDArray[np.float64] | None = None
+    """The agent's position in the world's frame (``map``, ``oracle``)."""
+    static: NDArray[np.float64] | None = None
+    """The reading the static world alone would give here (``map``, ``oracle``)."""
+    obstacles: NDArray[np.float64] | None = None
+    """Moving obstacles as rows (x, y, vx, vy, radius), velocities in steps per step,
+    measured over the last step (``oracle``)."""
+
+
+class Agent(Protocol):
+    """A navigating method: told the task, then asked for a velocity each step."""
+
+    name: str
+    """The method's name in results (e.g. ``copi-extended``, ``dwa``)."""
+    sensing: str
+    """The least sensing level the method needs."""
+
+    def reset(self, task: Task) -> None:
+        """Start an episode."""
+
+    def act(self, obs: Observation) -> NDArray[np.float64]:
+        """The velocity for this step, shape (2,), norm at most 1."""
+        ...
+
+
+class Steering:
+    """The global half shared by copi's modes and the local baselines: where to go.
+
+    At level ``map`` and above it follows the static route (:class:`Route`, the shortest
+    path on the static world, replanned when the agent loses sight of it); at ``sensor``
+    it heads for the goal (:class:`Greedy` on the relative goal). So every method at one
+    level gets the same global direction, and only its local behaviour differs.
+    """
+
+    def reset(self, task: Task) -> None:
+        self.route: Route | None = None
+        if task.world is not None and task.start is not None and task.goal is not None:
+            self.route = Route()
+            self.route.reset(task.world, task.start, task.goal, task.agent_radius)
+        self.greedy = Greedy()
+
+    def aim(self, obs: Observation) -> tuple[NDArray[np.float64], float]:
+        """(desired direction, distance to the point aimed at)."""
+        if self.route is not None and obs.position is not None:
+            return self.route.aim(obs.position)
+        g = obs.goal
+        return np.asarray(g, dtype=np.float64), math.hypot(g[0], g[1])
+
+
+class CopiAgent:
+    """copi's online chain (:class:`ContextController`) as an :class:`Agent`.
+
+    The context chain picks among the template's policies; :class:`Steering` gives the
+    global direction. With a guard, the static reading (level ``map`` and above) tells
+    the guard which hits are walls; at ``sensor`` every hit counts as a hazard.
+
+    Parameters
+    ----------
+    capabilities : Capabilities
+    name : str
+    guard : float
+        See :class:`ContextController`.
+    continual : bool
+        Grow contexts for unfamiliar readings (see :class:`ContextController`).
+    """
+
+    sensing = "sensor"
+
+    def __init__(
+        self,
+        capabilities: Capabilities,
+        *,
+        name: str = "copi",
+        guard: float = 0.0,
+        continual: bool = False,
+    ) -> None:
+        self.capabilities = capabilities
+        self.name = name
+        self.guard = guard
+        self.continual = continual
+        self.steering = Steering()
+        self.controller = ContextController(capabilities, guard=guard, continual=continual)
+
+    def reset(self, task: Task) -> None:
+        if task.n_rays != self.capabilities.n_rays:
+            raise InvalidArgumentError(
+                f"the capabilities were learnt for {self.capabilities.n_rays} rays; "
+                f"the sensor has {task.n_rays}"
+            )
+        self.controller = ContextController(
+            self.capabilities, guard=self.guard, continual=self.continual
+        )
+        self.steering.reset(task)
+
+    def act(self, obs: Observation) -> NDArray[np.float64]:
+        desired, reach = self.steering.aim(obs)
+        static = obs.static if self.guard > 0 else None
+        action, _ = self.controller.decide(obs.ranges, desired, reach=reach, static=static)
+        return action
+
+    def counters(self) -> dict[str, Any]:
+        """Per-episode diagnostics stored with the result."""
+        return {"unfamiliar": self.controller.unfamiliar_rate}

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from scipy.integrate import solve_ivp
 
 from copi.errors import InvalidArgumentError
 from copi.games import (
@@ -20,6 +21,7 @@ from copi.games import (
     critical_beta,
     parallel_env,
     play_open,
+    pursuer_step,
 )
 
 DATA = (
@@ -99,6 +101,51 @@ def test_the_car_drives_exact_arcs(u: float, heading: float, dt: float) -> None:
     else:
         chord = dist
     assert np.linalg.norm(disp) == pytest.approx(chord, rel=1e-9, abs=1e-12)
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_world_frame_simulation_solves_the_papers_relative_equations(seed: int) -> None:
+    """§IV gives the evader relative to the car: x' = V_e sin(phi) - V_p y u / R,
+    y' = V_e cos(phi) - V_p + V_p x u / R. Integrate them (tight tolerances) and compare
+    with copi's world-frame steps mapped into the car's frame, x to its right and y along
+    its heading, with the paper's u = -u of copi (copi's u > 0 turns left). The evader
+    keeps a world direction a, so its paper control is phi(t) = heading(t) - a."""
+    rng = np.random.default_rng(seed)
+    params = ChauffeurParams(capture_radius=1e-3, substeps=7)
+    vp, ve, r = params.pursuer_speed, params.evader_speed, params.turn_radius
+    u = float(rng.choice([-1.0, 1.0])) if seed < 2 else float(rng.uniform(-1, 1))
+    a, h0 = rng.uniform(-np.pi, np.pi, 2)
+    car = Pursuer(rng.uniform(-5, 5, 2), h0, params)
+    e = car.position + rng.uniform(8, 15) * np.array([np.cos(a + 1.0), np.sin(a + 1.0)])
+    de = ve * np.array([np.cos(a), np.sin(a)])  # one time step of the evader
+    frame = [(car.position.copy(), car.heading, e.copy())]
+    for _ in range(3):
+        tau, _ = pursuer_step(car, e, de, np.zeros((0, 4)), 0.5, control=u)
+        assert tau == math.inf
+        e = e + de
+        frame.append((car.position.copy(), car.heading, e.copy()))
+
+    def car_frame(p, h, ev):
+        d = ev - p
+        return np.array([d @ [np.sin(h), -np.cos(h)], d @ [np.cos(h), np.sin(h)]])
+
+    u_paper = -u
+
+    def paper(t, xy):
+        phi = h0 + u * vp * t / r - a
+        x, y = xy
+        return [
+            ve * np.sin(phi) - vp * y * u_paper / r,
+            ve * np.cos(phi) - vp + vp * x * u_paper / r,
+        ]
+
+    sol = solve_ivp(
+        paper, (0, 3), car_frame(*frame[0]), t_eval=[0, 1, 2, 3], rtol=1e-11, atol=1e-11,
+        method="DOP853",
+    )  # fmt: skip
+    for k in range(4):
+        np.testing.assert_allclose(sol.y[:, k], car_frame(*frame[k]), atol=1e-8)
+        assert frame[k][1] == pytest.approx(h0 + u * vp * k / r, abs=1e-12)
 
 
 def test_games_are_reproducible_and_walls_stop_the_car() -> None:

@@ -1,5 +1,6 @@
 from __future__ import annotations
 
+import itertools
 import json
 import zipfile
 from pathlib import Path
@@ -10,7 +11,13 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 from copi.errors import CapabilitiesFormatError, InvalidArgumentError
-from copi.learning import FORMAT_VERSION, Capabilities, LearnParams, learn
+from copi.learning import (
+    FORMAT_VERSION,
+    Capabilities,
+    LearnParams,
+    PermutationAutomaton,
+    learn,
+)
 
 SMALL = LearnParams(worlds=6, steps=150, seed=1)
 
@@ -52,13 +59,30 @@ def test_summary_and_online_shortcuts(caps: Capabilities) -> None:
     assert s["nodes"] == len(caps.nodes) and s["reduced_landmarks"] <= s["landmarks"] <= s["nodes"]
     assert s["policies"] <= 4 * s["reduced_landmarks"]
     assert caps.node_template.shape == (len(caps.nodes),)
-    # template ~ g . landmark within the reduction tolerance
-    tol = caps.stats["stages"][3]["tolerance"]
-    red, lm, g = caps.reduction, caps.landmarks, caps.group
-    for j in range(lm.n_landmarks):
-        t = lm.points[red.templates[red.template_of[j]]]
-        moved = g.apply(int(red.element[j]), lm.points[j])
-        assert np.sqrt(((moved - t) ** 2).mean()) <= tol + 1e-12
+
+
+def test_every_assignment_is_one_the_papers_automaton_accepts(
+    caps: Capabilities, tmp_path: Path
+) -> None:
+    """Read back from a file: each landmark's (template, g) is accepted by the automaton
+    of §II-C with the stored tolerance, and no two templates accept each other."""
+    c = Capabilities.load(caps.save(tmp_path / "caps.npz"))
+    tol = c.stats["symmetry_tolerance"]
+    assert tol == c.stats["stages"][3]["tolerance"] > 0
+    fa = PermutationAutomaton.from_operators(c.group.operators)
+    red, pts, g = c.reduction, c.landmarks.points, c.group
+    merged = 0
+    for j in range(c.landmarks.n_landmarks):
+        template = pts[red.templates[red.template_of[j]]]
+        # accept(chi1, chi2) lists the P with chi2 ~ P . chi1: here template ~ g . landmark
+        accepted = {fa.permutation(lab).tobytes() for lab in fa.accept(pts[j], template, tol)}
+        assert g.perms[red.element[j]].tobytes() in accepted
+        moved = g.apply(int(red.element[j]), pts[j])
+        assert np.abs(moved - template).max() == pytest.approx(red.residual[j], abs=1e-12)
+        merged += red.templates[red.template_of[j]] != j
+    assert merged > 0  # the test above is not vacuous
+    for a, b in itertools.combinations(red.templates, 2):
+        assert fa.accept(pts[a], pts[b], tol) == []
 
 
 def _write_npz(path: Path, **arrays) -> Path:

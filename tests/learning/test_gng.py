@@ -3,6 +3,8 @@ from __future__ import annotations
 import networkx as nx
 import numpy as np
 import pytest
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import connected_components
 from scipy.spatial.distance import cdist
 from sklearn.utils.estimator_checks import parametrize_with_checks
 
@@ -17,9 +19,14 @@ def test_sklearn_estimator_contract(estimator, check) -> None:
     check(estimator)
 
 
+def _centres(rng: np.random.Generator, dim: int) -> np.ndarray:
+    return rng.uniform(0, 10, size=(5, dim))
+
+
 def _stream(n: int = 3000, dim: int = 6, seed: int = 0) -> np.ndarray:
+    """Five Gaussian clusters (sd 0.7) around :func:`_centres`."""
     rng = np.random.default_rng(seed)
-    centres = rng.uniform(0, 10, size=(5, dim))
+    centres = _centres(rng, dim)
     return centres[rng.integers(0, 5, n)] + rng.normal(0, 0.7, size=(n, dim))
 
 
@@ -70,7 +77,26 @@ def test_edges_and_networkx_view() -> None:
     assert g.edges[int(i), int(j)]["length"] == pytest.approx(
         np.linalg.norm(gng.nodes_[i] - gng.nodes_[j])
     )
-    assert nx.number_connected_components(g) >= 1
+    # The view's components are those of edges_ (counted apart), and they follow the
+    # data's clusters: each cluster's nodes (by nearest centre) lie in one component, and
+    # a component joins clusters only when their centres are close (seed 0's clusters 0
+    # and 3 are 4.9 apart, under three typical radii 0.7 sqrt(6) = 1.7; the others >= 8.6).
+    n_parts, part = connected_components(
+        csr_matrix(
+            (np.ones(len(gng.edges_)), (gng.edges_[:, 0], gng.edges_[:, 1])),
+            shape=(len(gng.nodes_),) * 2,
+        ),
+        directed=False,
+    )
+    assert nx.number_connected_components(g) == n_parts
+    centres = _centres(np.random.default_rng(0), 6)
+    cluster = cdist(gng.nodes_, centres).argmin(1)
+    assert all(len(set(part[cluster == c])) == 1 for c in range(5))
+    for p in range(n_parts):
+        joined = np.unique(cluster[part == p])
+        assert cdist(centres[joined], centres[joined]).max() < 6.0
+    close = cdist(centres, centres)[np.triu_indices(5, 1)] < 6.0
+    assert int(close.sum()) == 1 and n_parts in (4, 5)
 
 
 def test_predict_transform_score_agree() -> None:

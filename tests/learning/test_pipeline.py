@@ -44,6 +44,8 @@ def test_forced_landmarks_and_progress_calls() -> None:
         ({"worlds": 0}, "worlds must be a positive int"),
         ({"directions": 6}, "directions must be 4, 8 or 16"),
         ({"learner": "ppo"}, "learner must be 'astar' or 'value-iteration'"),
+        ({"symmetry_tol": -1.0}, "symmetry_tol must be >= 0"),
+        ({"symmetry_quantile": 101.0}, "symmetry_quantile must be in"),
     ],
 )
 def test_bad_params(kwargs, message) -> None:

@@ -5,10 +5,10 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from scipy.spatial.distance import directed_hausdorff
+from scipy.spatial.distance import directed_hausdorff, pdist
 
 from copi.errors import InvalidArgumentError
-from copi.learning import GrowingNeuralGas, skeletonize
+from copi.learning import GrowingNeuralGas, explore, skeletonize
 
 
 def _random_graph(seed: int, n: int = 25, dim: int = 3):
@@ -82,17 +82,76 @@ def test_members_and_graph_distance_landmarks(seed: int, want: int) -> None:
         assert all(mine <= hops[j].get(i, np.inf) for j in hops)
 
 
-def test_on_a_context_map_the_knee_is_stable_and_fast_enough() -> None:
+def _clusters(m: int, c: int, r: float, gap: float, seed: int):
+    """m clusters of c nodes, each in a square of half-side r (complete graph inside),
+    centred ``gap`` apart on a line and chained by one edge between neighbours."""
+    rng = np.random.default_rng(seed)
+    centres = np.c_[gap * np.arange(m), np.zeros(m)]
+    pos = np.concatenate([ctr + rng.uniform(-r, r, size=(c, 2)) for ctr in centres])
+    edges = [(a * c + i, a * c + j) for a in range(m) for i in range(c) for j in range(i + 1, c)]
+    edges += [(a * c, (a + 1) * c) for a in range(m - 1)]
+    return pos, np.array(edges), np.repeat(np.arange(m), c)
+
+
+@pytest.mark.parametrize(("m", "c", "seed"), [(2, 5, 0), (4, 12, 1), (6, 25, 2), (9, 40, 3)])
+def test_knee_is_where_the_clusters_are_contracted(m: int, c: int, seed: int) -> None:
+    """An H curve whose knee is known. Within-cluster edges (length <= w = 2 sqrt(2) r) are
+    all shorter than the gaps, so the first k0 = m (c - 1) contractions merge every
+    cluster into one node and keep H <= w; any later one joins two clusters and makes
+    H >= gap / 2 - w. With K = mc - 1 contractions in all and h(K) between gap / 2 - w
+    and the diameter D of the nodes, the normalised x - y is at least k0 / K - w / (gap / 2
+    - w) at k0, below (k0 - 1) / K before and below 1 - (gap / 2 - w) / D after: when the
+    premises below hold, the knee is k0 and the landmarks are the clusters."""
+    r, gap = 1e-4, 3.0
+    pos, edges, cluster = _clusters(m, c, r, gap, seed)
+    w = 2 * np.sqrt(2) * r
+    big_k, k0 = m * c - 1, m * (c - 1)
+    diameter = pdist(pos).max()  # h(K): the last node lies in the nodes' hull
+    at_k0 = k0 / big_k - w / (gap / 2 - w)
+    assert at_k0 > (k0 - 1) / big_k  # premise: the flat part rises to k0
+    assert at_k0 > 1 - (gap / 2 - w) / diameter  # premise: every jump after k0 is too high
+    lm = skeletonize((pos, edges))
+    assert lm.k == k0 and lm.n_landmarks == m
+    # every cluster became exactly one landmark
+    assert len({(int(a), int(b)) for a, b in zip(cluster, lm.members, strict=True)}) == m
+
+
+def test_knee_agrees_with_a_direct_reading_of_the_definition() -> None:
+    """On a real context map: recompute the knee from the curve alone, as the point of
+    the normalised running-max curve farthest (perpendicular distance) below its chord."""
     rng = np.random.default_rng(0)
     X = np.concatenate([rng.normal(c, 0.3, size=(800, 4)) for c in (0.0, 3.0, 6.0)])
     gng = GrowingNeuralGas(random_state=0).fit(X)
     lm = skeletonize(gng)
-    assert 1 <= lm.n_landmarks < len(gng.nodes_)
-    assert lm.criterion[lm.k] == lm.criterion.max()
     components = nx.number_connected_components(gng.to_networkx())
     assert len(lm.merges) == len(gng.nodes_) - components and len(lm.curve) == len(lm.merges) + 1
-    lit = skeletonize(gng, method="curvature", window=3)
-    assert lit.criterion[lit.k] == lit.criterion.max()
+    h = np.array([max(lm.curve[: i + 1]) for i in range(len(lm.curve))])
+    pts = np.c_[np.linspace(0, 1, len(h)), h / h[-1]]
+    chord, d = pts[-1] - pts[0], pts - pts[0]
+    below = (chord[1] * d[:, 0] - chord[0] * d[:, 1]) / np.hypot(*chord)  # signed distance
+    assert lm.k == int(np.argmax(below))
+    assert lm.n_landmarks == len(gng.nodes_) - lm.k
+    assert 1 < lm.n_landmarks < len(gng.nodes_) // 4
+
+
+def test_landmark_counts_are_stable_over_map_and_exploration_seeds() -> None:
+    """10 worlds x 300 steps grow a 62-node map. Over 30 map seeds on the same readings
+    the knee gave 5-16 landmarks, over 30 exploration seeds 6-13 (the curvature rule:
+    12-59 and 5-59). Five of each must stay in 4-18 landmarks, and the knee must spread
+    less than the curvature rule over the map seeds."""
+    readings = explore(10, 300, seed=0).readings
+    maps = [GrowingNeuralGas(random_state=s).fit(readings) for s in range(5)]
+    by_map = [skeletonize(g).n_landmarks for g in maps]
+    by_exploration = [
+        skeletonize(
+            GrowingNeuralGas(random_state=0).fit(explore(10, 300, seed=s).readings)
+        ).n_landmarks
+        for s in range(5)
+    ]
+    assert {len(g.nodes_) for g in maps} == {62}
+    assert all(4 <= n <= 18 for n in by_map + by_exploration), (by_map, by_exploration)
+    literal = [skeletonize(g, method="curvature").n_landmarks for g in maps]
+    assert max(by_map) - min(by_map) < max(literal) - min(literal), (by_map, literal)
 
 
 def test_bad_arguments() -> None:

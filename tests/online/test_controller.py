@@ -73,9 +73,10 @@ def test_guard_refuses_a_move_into_a_near_hit(small_caps) -> None:
     guarded = ContextController(caps, guard=1.0)
     a_free, info = free.decide(s, [1.0, 0.0], explain=True)
     a_guard, info_g = guarded.decide(s, [1.0, 0.0], explain=True)
-    if info.choice == "E":
-        assert info_g.choice != "E"
-        assert a_guard[0] < 0.99
+    hit = np.array([0.9, 0.0])
+    assert np.linalg.norm(a_free - hit) < 1.0  # the plain chain steps within 1 of the hit
+    assert info_g.choice != info.choice
+    assert np.linalg.norm(a_guard - hit) >= 1.0  # the guarded one keeps the clearance
 
 
 def test_unfamiliar_readings_are_flagged_and_can_be_learnt(small_caps) -> None:
@@ -91,9 +92,18 @@ def test_unfamiliar_readings_are_flagged_and_can_be_learnt(small_caps) -> None:
     assert ctl.n_learnt >= 2
     _, info = ctl.decide(odd[-1], [0.0, 1.0], explain=True)
     assert info.node >= len(caps.nodes)  # the reading now has a context of its own
-    familiar = ContextController(caps)
-    familiar.decide(READINGS[5], [1.0, 0.0])
-    assert familiar.unfamiliar_rate in (0.0, 1.0)
+    # the rate counts, over all decisions so far, readings farther from every node than
+    # the threshold: 99 % of the training readings are within it
+    mixed = np.concatenate([READINGS[:40], odd[:10]])
+    d = np.sqrt(((mixed[:, None, :] - caps.nodes[None]) ** 2).sum(-1)).min(1)
+    threshold = caps.stats["familiarity_threshold"]
+    expected = float((d > threshold).mean())
+    assert (d[40:] > threshold).all() and 10 / 50 <= expected < 1
+    plain = ContextController(caps)
+    assert plain.threshold == threshold and plain.unfamiliar_rate == 0.0
+    for s in mixed:
+        plain.decide(s, [1.0, 0.0])
+    assert plain.unfamiliar_rate == pytest.approx(expected, abs=1e-12)
 
 
 def test_bad_readings_are_refused(small_caps) -> None:

@@ -6,10 +6,14 @@ gives the evader's position relative to the pursuer,
 
     x' = V_e sin(phi) - V_p y u / R,    y' = V_e cos(phi) - V_p + V_p x u / R,
 
-with y along the pursuer's heading. copi simulates the same game in the world frame:
-the pursuer's arcs are integrated exactly (constant u over a sub-step is a circular arc
-of radius R / |u|), the evader moves straight within a sub-step, and capture is tested
-on the closest approach within each sub-step.
+copi simulates the same game in the world frame: the pursuer's arcs are integrated
+exactly (constant u over a sub-step is a circular arc of radius R / |u|), the evader
+moves straight within a sub-step, and capture is tested on the closest approach within
+each sub-step. The two agree with: x the evader's offset to the car's right and y along
+the car's heading (:func:`_relative`); phi the evader's heading measured clockwise from
+the car's; and u_paper = -u, since copi's u > 0 turns the car left (counter-clockwise,
+heading' = u V_p / R) where the paper's turns it right. tests/games/test_chauffeur.py
+integrates the paper's equations and checks copi's steps against them.
 """
 
 from __future__ import annotations
@@ -153,7 +157,8 @@ class Pursuer:
 
     def arc(self, u: float, dt: float) -> NDArray[np.float64]:
         """Displacement over time dt with constant control u (exact circular arc), and
-        the heading is advanced."""
+        the heading is advanced by u V_p dt / R: u > 0 turns left (counter-clockwise),
+        the opposite of the paper's u (see the module docstring)."""
         p = self.params
         u = float(np.clip(u, -1.0, 1.0))
         dist = p.pursuer_speed * dt

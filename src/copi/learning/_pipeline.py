@@ -51,9 +51,12 @@ class LearnParams:
     skeleton_method: str = "knee"
     """How k is chosen on H(k): "knee" or "curvature" (see copi.learning.skeletonize)."""
     symmetry_tol: float | None = None
-    """RMS difference (agent steps per ray) under which a landmark maps onto a template;
-    None: the context map's own RMS quantisation error per ray, the typical spread of
-    readings around a node."""
+    """Largest difference on any ray (agent steps) with which a landmark still maps onto a
+    template (the tolerance of the paper's automaton, §II-C); None: derived from the
+    training data with ``symmetry_quantile``."""
+    symmetry_quantile: float = 95.0
+    """Percentile of the context map's per-ray error |reading[i] - nearest node[i]|, over
+    every training reading and ray, used as ``symmetry_tol`` when that is None."""
     directions: int = 4
     """Local policies per template: 4 (E, N, W, S, the paper's), 8 or 16."""
     learner: str = "astar"
@@ -72,6 +75,10 @@ class LearnParams:
             raise InvalidArgumentError(f"landmarks must be >= 1; got {self.landmarks}")
         if self.symmetry_tol is not None and not self.symmetry_tol >= 0:
             raise InvalidArgumentError(f"symmetry_tol must be >= 0; got {self.symmetry_tol}")
+        if not 0 <= self.symmetry_quantile <= 100:
+            raise InvalidArgumentError(
+                f"symmetry_quantile must be in [0, 100]; got {self.symmetry_quantile}"
+            )
 
 
 Progress = Callable[[str, int, int], None]
@@ -103,7 +110,10 @@ def learn(params: LearnParams | None = None, *, progress: Progress | None = None
     t0 = time.perf_counter()
     report("context map", 0, 1)
     gng = GrowingNeuralGas(p.max_nodes, epochs=p.epochs, random_state=p.seed).fit(ex.readings)
-    dist = gng.transform(ex.readings).min(1)
+    to_nodes = gng.transform(ex.readings)
+    nearest = to_nodes.argmin(1)
+    dist = to_nodes[np.arange(len(nearest)), nearest]
+    del to_nodes
     qe = float(dist.mean())
     # Online, a reading farther than this from every node is "unfamiliar" (§III): the
     # distance that 99 % of the training readings are within.
@@ -135,7 +145,18 @@ def learn(params: LearnParams | None = None, *, progress: Progress | None = None
     t0 = time.perf_counter()
     group = SymmetryGroup.generate(ring_operators(p.n_rays))
     _check_directions(group, p.directions)
-    tol = p.symmetry_tol if p.symmetry_tol is not None else qe / np.sqrt(p.n_rays)
+    # The paper accepts chi_1 ~ g . chi_2 "or an approximation thereof, as the values may
+    # be continuous" (§II-C). Its resolution here is the map's own: a training reading's
+    # ray lies within this distance of the same ray of the node that represents it in
+    # symmetry_quantile % of cases, so two landmarks agreeing that closely on every ray
+    # differ by no more than the map already ignores within one node.
+    per_ray = np.abs(ex.readings - gng.nodes_[nearest])
+    tol = (
+        p.symmetry_tol
+        if p.symmetry_tol is not None
+        else float(np.percentile(per_ray, p.symmetry_quantile))
+    )
+    del per_ray
     sizes = np.bincount(lm.members, minlength=lm.n_landmarks)
     red = reduce_landmarks(lm.points, group, tol=tol, order=np.argsort(-sizes, kind="stable"))
     stages.append(
@@ -180,6 +201,7 @@ def learn(params: LearnParams | None = None, *, progress: Progress | None = None
             "stages": _jsonable(stages),
             "quantization_error": float(qe),
             "familiarity_threshold": familiar,
+            "symmetry_tolerance": float(tol),
         },
     )
 

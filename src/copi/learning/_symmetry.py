@@ -281,7 +281,8 @@ class Reduction:
     element: NDArray[np.int64]
     """For every landmark, the group element g with template ~ g . landmark."""
     residual: NDArray[np.float64]
-    """For every landmark, RMS difference between its template and g . landmark."""
+    """For every landmark, the largest per-component difference max_i |template[i] -
+    (g . landmark)[i]| (at most the reduction's tolerance; 0 for a template)."""
 
 
 def reduce_landmarks(
@@ -289,9 +290,14 @@ def reduce_landmarks(
 ) -> Reduction:
     """Reduce landmarks to templates (paper §II-C, "the reduced landmark set X<").
 
-    Landmarks are visited in ``order`` (default: as given); each one becomes a template
-    unless some group element maps it within ``tol`` (RMS over the vector) of an existing
-    template, in which case it is assigned to the closest such template and element.
+    Landmarks are visited in ``order`` (default: as given). Each one is tested against
+    the templates kept so far with the paper's acceptance test: template ~ g . landmark
+    for some group element g when every component agrees within ``tol``
+    (:meth:`SymmetryGroup.matches`, the fast equivalent of
+    :meth:`PermutationAutomaton.accept`, against which it is tested). An accepted landmark
+    is assigned to the template and element with the smallest largest component
+    difference; a landmark no template accepts becomes a template. So every assignment is
+    one the automaton accepts, and no two templates accept each other.
 
     Examples
     --------
@@ -300,12 +306,16 @@ def reduce_landmarks(
     >>> red = reduce_landmarks(pts, g, tol=1e-9)
     >>> red.templates.tolist(), red.template_of.tolist(), g.words[red.element[1]]
     ([0, 2], [0, 0, 1], 'rrr')
+    >>> reduce_landmarks(pts + [[0, 0, 0, 0], [0.5, 0, 0, 0], [0, 0, 0, 0]], g, tol=0.5).residual
+    array([0. , 0.5, 0. ])
     """
     pts = np.asarray(points, dtype=np.float64)
     if pts.ndim != 2 or pts.shape[1] != group.perms.shape[1]:
         raise InvalidArgumentError(
             f"landmarks must have shape (n, {group.perms.shape[1]}); got {pts.shape}"
         )
+    if not tol >= 0:
+        raise InvalidArgumentError(f"tol must be >= 0; got {tol}")
     visit = np.arange(len(pts)) if order is None else np.asarray(order, dtype=np.int64)
     templates: list[int] = []
     template_of = np.zeros(len(pts), dtype=np.int64)
@@ -314,11 +324,11 @@ def reduce_landmarks(
     for i in visit:
         best = (np.inf, -1, 0)
         for t, j in enumerate(templates):
-            res = group.residuals(pts[j], pts[i])
-            g = int(np.argmin(res))
-            if res[g] < best[0]:
-                best = (float(res[g]), t, g)
-        if best[1] >= 0 and best[0] <= tol:
+            for g in group.matches(pts[i], pts[j], tol):  # pts[j] ~ g . pts[i]
+                res = float(np.abs(group.apply(g, pts[i]) - pts[j]).max())
+                if res < best[0]:
+                    best = (res, t, g)
+        if best[1] >= 0:
             residual[i], template_of[i], element[i] = best
         else:
             template_of[i] = len(templates)

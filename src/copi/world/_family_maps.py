@@ -189,7 +189,8 @@ def _window(
     passage = scale * m.passage_cells
     r_hi = min(1.0, 0.3 * passage)
     count = int(np.clip(round(region.area / 90.0), 4, 10))
-    spec = ObstacleSpec(count=(count, count + 5), radius=(min(0.5, 0.5 * r_hi), r_hi))
+    radius = (round(min(0.5, 0.5 * r_hi), 3), round(r_hi, 3))
+    spec = ObstacleSpec(count=(count, count + 5), radius=radius)
     label = name or f"maps-{m.name}-x{x0}-y{y0}-{wx}x{wy}"
     try:
         return World(

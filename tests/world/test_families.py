@@ -77,22 +77,21 @@ def test_polygon_worlds_are_not_star_shaped_and_have_few_holes() -> None:
     assert set(holes) <= {0, 1, 2, 3} and len(set(holes)) >= 3
 
 
-def test_polygon_goal_is_in_sight_at_most_forty_percent_of_tasks() -> None:
+def _sight_share(family: str, n: int) -> float:
     seen = []
-    for k in range(200):
-        world, rng = _world("polygon", k)
-        s, g = sample_start_goal(world, rng)
+    for k in range(n):
+        world, rng = _world(family, k)
+        s, g = sample_start_goal(world, rng)  # the start and goal Simulator.from_world draws
         seen.append(in_sight(world, s, g, radius=0.3))
-    assert 0.15 < np.mean(seen) <= 0.40
+    return float(np.mean(seen))
+
+
+def test_polygon_goal_is_in_sight_at_most_forty_percent_of_tasks() -> None:
+    assert 0.15 < _sight_share("polygon", 200) <= 0.40
 
 
 def test_indoor_goal_is_rarely_in_sight() -> None:
-    seen = []
-    for k in range(100):
-        world, rng = _world("indoor", k)
-        s, g = sample_start_goal(world, rng)
-        seen.append(in_sight(world, s, g, radius=0.3))
-    assert np.mean(seen) < 0.2
+    assert _sight_share("indoor", 100) < 0.2
 
 
 def test_crowd_is_the_polygon_world_with_a_dense_fast_crowd() -> None:

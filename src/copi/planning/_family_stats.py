@@ -9,6 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from copi._rng import Seed, as_generator
 from copi.errors import InvalidArgumentError
 from copi.planning._cspace import shortest_path
 from copi.world import World, in_sight, sample_start_goal, sample_world
@@ -43,9 +44,7 @@ class FamilyStats:
     """Tasks whose goal the planner could not reach (0 for a sound family)."""
 
 
-def mean_free_width(
-    world: World, seed: np.random.Generator | int | None = None, *, points: int = 256
-) -> float:
+def mean_free_width(world: World, seed: Seed = None, *, points: int = 256) -> float:
     """Mean width of a world's free space, in agent steps: four times the mean clearance
     (distance to the nearest wall) of points drawn uniformly in the free space.
 
@@ -59,7 +58,9 @@ def mean_free_width(
     >>> round(mean_free_width(corridor, 0, points=20000), 1)
     3.0
     """
-    rng = np.random.default_rng(seed) if not isinstance(seed, np.random.Generator) else seed
+    if int(points) != points or points < 1:
+        raise InvalidArgumentError(f"points must be a positive int; got {points!r}")
+    rng = as_generator(seed)
     xmin, ymin, xmax, ymax = world.bounds
     found: list[np.ndarray] = []
     total = 0

@@ -16,11 +16,18 @@ from pathlib import Path
 
 import numpy as np
 import shapely
-from numpy.typing import NDArray
-from shapely.geometry import MultiPolygon, Polygon, box
+from shapely.geometry import MultiPolygon, Polygon
 
 from copi.errors import InvalidWorldError, MapFileError
 from copi.world import World
+from copi.world._gridmap import (  # noqa: F401 - re-exported
+    BLOCKED,
+    PASSABLE,
+    GridMap,
+    cell_center,
+    free_geometry,
+    read_map,
+)
 
 __all__ = [
     "GridMap",
@@ -31,25 +38,6 @@ __all__ = [
     "read_map",
     "read_scenarios",
 ]
-
-PASSABLE = frozenset(".G")
-BLOCKED = frozenset("@OTSW")
-
-
-@dataclass(frozen=True, eq=False)
-class GridMap:
-    """A Moving AI map: ``free[y, x]`` is True for a passable cell."""
-
-    name: str
-    free: NDArray[np.bool_]
-
-    @property
-    def height(self) -> int:
-        return int(self.free.shape[0])
-
-    @property
-    def width(self) -> int:
-        return int(self.free.shape[1])
 
 
 @dataclass(frozen=True)
@@ -65,46 +53,6 @@ class Scenario:
     optimal_length: float
     line: int
     """Line number in the file (1-based), for messages."""
-
-
-def read_map(path: str | os.PathLike[str]) -> GridMap:
-    """Read a ``.map`` file; a malformed one raises :class:`MapFileError` with its line."""
-    p = Path(path)
-    try:
-        lines = p.read_text(encoding="ascii").splitlines()
-    except (OSError, UnicodeDecodeError) as exc:
-        raise MapFileError(f"{p}: cannot read a Moving AI map ({exc})") from None
-    header: dict[str, str] = {}
-    i = 0
-    while i < len(lines) and lines[i].strip() != "map":
-        parts = lines[i].split()
-        if len(parts) != 2:
-            raise MapFileError(
-                f"{p}:{i + 1}: expected 'key value' header or 'map'; got {lines[i]!r}"
-            )
-        header[parts[0]] = parts[1]
-        i += 1
-    if i == len(lines):
-        raise MapFileError(f"{p}: no 'map' line; not a Moving AI map")
-    try:
-        h, w = int(header["height"]), int(header["width"])
-    except (KeyError, ValueError):
-        raise MapFileError(
-            f"{p}: header must give integer 'height' and 'width'; got {header}"
-        ) from None
-    rows = lines[i + 1 : i + 1 + h]
-    if len(rows) != h:
-        raise MapFileError(f"{p}: expected {h} map rows; found {len(rows)}")
-    grid = np.zeros((h, w), dtype=bool)
-    for y, row in enumerate(rows):
-        if len(row) < w:
-            raise MapFileError(f"{p}:{i + 2 + y}: expected {w} cells; found {len(row)}")
-        chars = set(row[:w])
-        unknown = chars - PASSABLE - BLOCKED
-        if unknown:
-            raise MapFileError(f"{p}:{i + 2 + y}: unknown cell characters {sorted(unknown)}")
-        grid[y] = [c in PASSABLE for c in row[:w]]
-    return GridMap(p.name, grid)
 
 
 def read_scenarios(path: str | os.PathLike[str]) -> list[Scenario]:
@@ -139,31 +87,6 @@ def read_scenarios(path: str | os.PathLike[str]) -> list[Scenario]:
         except ValueError as exc:
             raise MapFileError(f"{p}:{n}: {exc}") from None
     return out
-
-
-def cell_center(grid: GridMap, cell: tuple[int, int]) -> NDArray[np.float64]:
-    """World coordinates of a cell's centre. Cell (x, y) is the unit square
-    [x, x + 1] x [H - 1 - y, H - y]: y points up in worlds, down in map files."""
-    x, y = cell
-    return np.array([x + 0.5, grid.height - y - 0.5])
-
-
-def free_geometry(grid: GridMap) -> Polygon | MultiPolygon:
-    """The closed free space of a map in world coordinates (blocked cells are closed
-    unit squares; see :func:`cell_center`)."""
-    h, w = grid.free.shape
-    runs = []
-    for y in range(h):
-        row = ~grid.free[y]
-        if not row.any():
-            continue
-        edges = np.flatnonzero(np.diff(np.concatenate([[0], row.astype(np.int8), [0]])))
-        top = h - y
-        runs += [box(a, top - 1, b, top) for a, b in zip(edges[::2], edges[1::2], strict=True)]
-    region = box(0, 0, w, h)
-    if not runs:
-        return region
-    return shapely.difference(region, shapely.union_all(runs))
 
 
 def map_world(grid: GridMap, *, near: tuple[int, int] | None = None) -> World:

@@ -1,6 +1,7 @@
 """The navigation domain of the paper's experiments (§IV).
 
-A static :class:`World` (a polygon with holes), the paper's random worlds, moving disc
+A static :class:`World` (a polygon with holes), the paper's random worlds and the
+benchmark's world families (:func:`sample_world`), moving disc
 obstacles, a holonomic disc agent, the ring :class:`RangeSensor`, world files, and the
 Gymnasium environment ``copi/Navigation-v0``. All randomness comes from a passed seed or
 ``numpy.random.Generator``.
@@ -10,6 +11,10 @@ from __future__ import annotations
 
 from copi.world._agents import RandomWalk
 from copi.world._env import NavigationEnv
+from copi.world._families import CROWD_OBSTACLES, FAMILIES, in_sight, sample_world
+from copi.world._family_indoor import IndoorParams, indoor_world
+from copi.world._family_maps import MOVINGAI_ENV, MapsParams, map_window_world, movingai_dir
+from copi.world._family_polygon import PolygonParams, is_star_shaped, polygon_world
 from copi.world._generate import WorldParams, place_obstacles, random_world, sample_start_goal
 from copi.world._io import load_worlds, save_worlds
 from copi.world._render import draw_simulator, draw_world, render_rgb
@@ -18,8 +23,14 @@ from copi.world._simulator import Simulator, StepResult
 from copi.world._world import ObstacleSpec, World
 
 __all__ = [
+    "CROWD_OBSTACLES",
+    "FAMILIES",
+    "IndoorParams",
+    "MOVINGAI_ENV",
+    "MapsParams",
     "NavigationEnv",
     "ObstacleSpec",
+    "PolygonParams",
     "RandomWalk",
     "RangeSensor",
     "Simulator",
@@ -28,10 +39,17 @@ __all__ = [
     "WorldParams",
     "draw_simulator",
     "draw_world",
+    "in_sight",
+    "indoor_world",
+    "is_star_shaped",
     "load_worlds",
+    "map_window_world",
+    "movingai_dir",
     "place_obstacles",
+    "polygon_world",
     "random_world",
     "render_rgb",
     "sample_start_goal",
+    "sample_world",
     "save_worlds",
 ]

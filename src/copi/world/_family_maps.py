@@ -1,0 +1,203 @@
+"""The ``maps`` world family: windows of Moving AI grid maps, scaled for disc agents."""
+
+from __future__ import annotations
+
+import functools
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import shapely
+from scipy import ndimage
+from shapely.geometry import Polygon
+
+from copi._rng import Seed, as_generator
+from copi.errors import InvalidArgumentError, InvalidWorldError
+from copi.world._gridmap import free_geometry, read_map
+from copi.world._world import ObstacleSpec, World
+
+__all__ = ["MOVINGAI_ENV", "MapsParams", "map_window_world", "movingai_dir"]
+
+MOVINGAI_ENV = "COPI_MOVINGAI"
+"""Environment variable naming the directory of Moving AI maps."""
+
+_REPO_ROOT = Path(__file__).resolve().parents[3]
+
+
+def movingai_dir(data_dir: str | os.PathLike[str] | None = None) -> Path:
+    """The directory of Moving AI ``.map`` files (searched recursively).
+
+    ``data_dir`` when given; else ``$COPI_MOVINGAI``; else ``../shared/data/movingai``
+    beside the current directory; else the same beside the repository this package
+    comes from. The first that holds a ``.map`` file wins.
+
+    Raises
+    ------
+    InvalidArgumentError
+        When none does, naming every place looked at.
+    """
+    if data_dir is not None:
+        candidates = [("data_dir", Path(data_dir))]
+    else:
+        env = os.environ.get(MOVINGAI_ENV)
+        candidates = [(f"${MOVINGAI_ENV}", Path(env))] if env else []
+        candidates += [
+            ("beside the current directory", Path.cwd().parent / "shared" / "data" / "movingai"),
+            ("beside the repository", _REPO_ROOT.parent / "shared" / "data" / "movingai"),
+        ]
+    for _, path in candidates:
+        if path.is_dir() and next(path.rglob("*.map"), None) is not None:
+            return path
+    looked = "; ".join(f"{path} ({why})" for why, path in candidates)
+    unset = ""
+    if data_dir is None and not os.environ.get(MOVINGAI_ENV):
+        unset = f" (${MOVINGAI_ENV} unset)"
+    raise InvalidArgumentError(
+        f"no Moving AI maps (*.map) found; looked in {looked}{unset}; "
+        f"pass data_dir or set ${MOVINGAI_ENV}"
+    )
+
+
+@dataclass(frozen=True)
+class MapsParams:
+    """The distribution of :func:`map_window_world`.
+
+    A map is drawn uniformly among the ``.map`` files of the data directory, then a square
+    window of it uniformly. The map is scaled so that its narrow passages are ``passage``
+    agent steps wide (narrow: the 10th percentile of the free space's width along its
+    medial axis, measured on the grid with a Euclidean distance transform), and at least
+    so that the whole map spans ``min_extent``. Moving obstacles get radii that fit those
+    passages (at most 0.3 of their width, and at most the paper's 1.0) and a count that
+    follows the free area (about one per 90 square agent steps, as in the paper's worlds).
+    """
+
+    data_dir: str | None = None
+    """Directory of ``.map`` files; None looks where :func:`movingai_dir` says."""
+    window: tuple[float, float] = (40.0, 60.0)
+    """Side of the square window, in agent steps, uniform (at most 0.85 of the map's
+    side, so that a small map still gives different worlds)."""
+    passage: float = 3.0
+    """Width, in agent steps, that the map's narrow passages are scaled to."""
+    min_extent: float = 40.0
+    """Least size of the scaled map's shorter side, in agent steps."""
+    agent_radius: float = 0.3
+    """Windows whose free space falls apart for an agent of this radius are redrawn (the
+    largest piece of free space is kept; walls cut off the rest)."""
+
+    def __post_init__(self) -> None:
+        if not (0 < self.window[0] <= self.window[1]):
+            raise InvalidArgumentError(f"window must satisfy 0 < low <= high; got {self.window}")
+        for key in ("passage", "min_extent"):
+            if not getattr(self, key) > 0:
+                raise InvalidArgumentError(f"{key} must be > 0; got {getattr(self, key)}")
+        if not self.agent_radius >= 0:
+            raise InvalidArgumentError(f"agent_radius must be >= 0; got {self.agent_radius}")
+
+
+@dataclass(frozen=True)
+class _Map:
+    name: str
+    free: shapely.Geometry
+    """Free space in cell units (y up), as :func:`free_geometry` gives it."""
+    height: int
+    width: int
+    passage_cells: float
+    """10th percentile of 2 x the distance to the nearest blocked cell on ridge cells."""
+
+
+@functools.lru_cache(maxsize=64)
+def _load(path: str) -> _Map:
+    grid = read_map(path)
+    free = grid.free
+    dist = ndimage.distance_transform_edt(np.pad(free, 1))[1:-1, 1:-1]
+    ridge = free & (dist >= ndimage.maximum_filter(dist, size=3))
+    width = 2.0 * dist[ridge]
+    passage = float(np.percentile(width, 10)) if width.size else 1.0
+    return _Map(Path(path).stem, free_geometry(grid), grid.height, grid.width, passage)
+
+
+@functools.lru_cache(maxsize=8)
+def _map_files(directory: str) -> tuple[str, ...]:
+    return tuple(sorted(str(p) for p in Path(directory).rglob("*.map")))
+
+
+def map_window_world(
+    seed: Seed = None, *, params: MapsParams | None = None, name: str | None = None
+) -> World:
+    """Draw a world of the ``maps`` family (see :class:`MapsParams`): a window of a Moving
+    AI map, scaled, with obstacles sized to its passages.
+
+    Parsed maps are cached (per file path), so only the first world of a map pays for
+    reading it.
+
+    Raises
+    ------
+    InvalidArgumentError
+        When the data directory holds no map (see :func:`movingai_dir`).
+    InvalidWorldError
+        When 100 windows in a row give no usable world.
+    """
+    rng = as_generator(seed)
+    p = params or MapsParams()
+    files = _map_files(str(movingai_dir(p.data_dir)))
+    for _ in range(100):
+        m = _load(files[int(rng.integers(len(files)))])
+        scale = max(p.passage / m.passage_cells, p.min_extent / min(m.height, m.width))
+        side = rng.uniform(*p.window) / scale
+        # whole cells (a window edge through a cell would leave slivers and half doors);
+        # a small map gives windows of at most 0.85 of it, so that worlds still differ
+        wx = max(1, round(min(side, 0.85 * m.width)))
+        wy = max(1, round(min(side, 0.85 * m.height)))
+        x0, y0 = int(rng.integers(0, m.width - wx + 1)), int(rng.integers(0, m.height - wy + 1))
+        world = _window(m, x0, y0, wx, wy, scale, p.agent_radius, name)
+        if world is not None:
+            return world
+    raise InvalidWorldError(f"no usable window found in 100 draws from {len(files)} maps")
+
+
+def _window(
+    m: _Map,
+    x0: int,
+    y0: int,
+    wx: int,
+    wy: int,
+    scale: float,
+    agent_radius: float,
+    name: str | None,
+) -> World | None:
+    cut = shapely.intersection(m.free, shapely.box(x0, y0, x0 + wx, y0 + wy))
+    cut = shapely.affinity.affine_transform(cut, [scale, 0, 0, scale, -scale * x0, -scale * y0])
+    # Blocked cells meeting only at a corner make holes that touch each other or the
+    # boundary at a point (a valid Shapely polygon, not a valid world); shrinking the free
+    # space by a hair merges them and cuts the zero-width pinches in between.
+    cut = shapely.buffer(cut, -1e-3, join_style="mitre")
+    parts = [g for g in shapely.get_parts(cut) if isinstance(g, Polygon) and g.area > 0]
+    if not parts:
+        return None
+    region = shapely.simplify(max(parts, key=lambda g: g.area), 0.0)
+    if not isinstance(region, Polygon):
+        return None
+    # start, goal and obstacles are drawn in one connected piece of free space, so the
+    # space the agent can use must not fall apart (same erosion as the simulator's)
+    usable = region.buffer(-agent_radius, quad_segs=8)
+    if not isinstance(usable, Polygon) or usable.area < 150.0:
+        return None
+    lo, hi = np.min(usable.exterior.coords, axis=0), np.max(usable.exterior.coords, axis=0)
+    if np.hypot(*(hi - lo)) < 20.0:
+        return None
+    passage = scale * m.passage_cells
+    r_hi = min(1.0, 0.3 * passage)
+    count = int(np.clip(round(region.area / 90.0), 4, 10))
+    radius = (round(min(0.5, 0.5 * r_hi), 3), round(r_hi, 3))
+    spec = ObstacleSpec(count=(count, count + 5), radius=radius)
+    label = name or f"maps-{m.name}-x{x0}-y{y0}-{wx}x{wy}"
+    try:
+        return World(
+            np.round(np.asarray(region.exterior.coords)[:-1], 6),
+            tuple(np.round(np.asarray(r.coords)[:-1], 6) for r in region.interiors),
+            name=label,
+            obstacles=spec,
+        )
+    except InvalidWorldError:
+        return None

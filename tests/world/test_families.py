@@ -1,0 +1,174 @@
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import shapely
+
+from copi.errors import InvalidArgumentError
+from copi.world import (
+    CROWD_OBSTACLES,
+    FAMILIES,
+    MOVINGAI_ENV,
+    Simulator,
+    World,
+    in_sight,
+    is_star_shaped,
+    movingai_dir,
+    sample_start_goal,
+    sample_world,
+)
+
+MOVINGAI = Path(__file__).resolve().parents[3] / "shared" / "data" / "movingai"
+HAVE_MAPS = MOVINGAI.is_dir()
+
+
+def _families() -> list:
+    need_maps = pytest.mark.skipif(not HAVE_MAPS, reason="shared/data is not beside the project")
+    return [pytest.param(f, marks=need_maps) if f == "maps" else f for f in FAMILIES]
+
+
+def _world(family: str, k: int, seed: int = 0) -> tuple[World, np.random.Generator]:
+    rng = np.random.default_rng([seed, k])
+    return sample_world(family, rng), rng
+
+
+def test_families_are_named_and_sorted() -> None:
+    assert FAMILIES == ("crowd", "indoor", "maps", "polygon", "star")
+    assert list(FAMILIES) == sorted(FAMILIES)
+
+
+@pytest.mark.parametrize("family", _families())
+def test_every_world_is_valid_and_gives_a_task(family: str) -> None:
+    for k in range(30):
+        world, rng = _world(family, k)
+        assert world.polygon.is_valid, (k, shapely.is_valid_reason(world.polygon))
+        assert world.name.startswith(f"{family}-")
+        sim = Simulator.from_world(world, rng)
+        assert np.hypot(*(sim.goal - sim.position)) >= 10.0
+        assert len(sim.radii) >= 1
+        assert (world.clearance(sim.centers) >= sim.radii - 1e-9).all()
+
+
+@pytest.mark.parametrize("family", _families())
+def test_same_seed_same_world_other_seed_other_world(family: str) -> None:
+    worlds = [_world(family, k)[0] for k in range(8)]
+    assert [_world(family, k)[0] for k in range(8)] == worlds
+    assert sample_world(family, 5) == sample_world(family, 5)
+    for a in range(len(worlds)):
+        for b in range(a):
+            assert worlds[a] != worlds[b], (a, b)
+
+
+def test_star_is_the_paper_generator() -> None:
+    from copi.world import random_world
+
+    w = sample_world("star", 11)
+    assert np.array_equal(w.boundary, random_world(11).boundary) and w.holes == ()
+
+
+def test_polygon_worlds_are_not_star_shaped_and_have_few_holes() -> None:
+    holes = []
+    for k in range(60):
+        w, _ = _world("polygon", k)
+        assert not is_star_shaped(w.boundary), k
+        holes.append(len(w.holes))
+    assert set(holes) <= {0, 1, 2, 3} and len(set(holes)) >= 3
+
+
+def _sight_share(family: str, n: int) -> float:
+    seen = []
+    for k in range(n):
+        world, rng = _world(family, k)
+        s, g = sample_start_goal(world, rng)  # the start and goal Simulator.from_world draws
+        seen.append(in_sight(world, s, g, radius=0.3))
+    return float(np.mean(seen))
+
+
+def test_polygon_goal_is_in_sight_at_most_forty_percent_of_tasks() -> None:
+    assert 0.15 < _sight_share("polygon", 200) <= 0.40
+
+
+def test_indoor_goal_is_rarely_in_sight() -> None:
+    assert _sight_share("indoor", 100) < 0.2
+
+
+def test_crowd_is_the_polygon_world_with_a_dense_fast_crowd() -> None:
+    assert CROWD_OBSTACLES.count == (25, 40) and CROWD_OBSTACLES.speed == 0.8
+    for k in range(10):
+        crowd, rng = _world("crowd", k)
+        poly, _ = _world("polygon", k)
+        assert crowd.obstacles == CROWD_OBSTACLES
+        assert np.array_equal(crowd.boundary, poly.boundary)
+        sim = Simulator.from_world(crowd, rng)
+        assert 25 <= len(sim.radii) <= 40 and sim.speed == 0.8
+
+
+def test_unknown_family_is_refused() -> None:
+    with pytest.raises(
+        InvalidArgumentError,
+        match=r"^family must be one of crowd, indoor, maps, polygon, star; got 'castle'$",
+    ):
+        sample_world("castle", 0)
+
+
+def test_maps_without_data_are_refused_clearly(tmp_path: Path) -> None:
+    missing = tmp_path / "nowhere"
+    with pytest.raises(InvalidArgumentError, match=r"no Moving AI maps \(\*\.map\) found") as err:
+        sample_world("maps", 0, data_dir=missing)
+    assert str(missing) in str(err.value) and MOVINGAI_ENV in str(err.value)
+    with pytest.raises(InvalidArgumentError, match="no Moving AI maps"):
+        movingai_dir(tmp_path)  # a directory without maps
+
+
+def test_maps_default_search_names_every_place(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import copi.world._family_maps as maps
+
+    monkeypatch.setenv(MOVINGAI_ENV, str(tmp_path / "env"))
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(maps, "_REPO_ROOT", tmp_path / "repo")
+    with pytest.raises(InvalidArgumentError) as err:
+        movingai_dir()
+    message = str(err.value)
+    for place in (tmp_path / "env", tmp_path.parent / "shared", tmp_path / "shared"):
+        assert str(place) in message
+
+
+def _write_map(path: Path, rows: list[str]) -> None:
+    head = f"type octile\nheight {len(rows)}\nwidth {len(rows[0])}\nmap\n"
+    path.write_text(head + "\n".join(rows) + "\n")
+
+
+def test_maps_from_the_environment_with_diagonal_blocks(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # pairs of blocks that touch only at a corner would make holes meeting at a point
+    grid = np.full((40, 40), ".")
+    for cx in range(4, 36, 8):
+        for cy in range(4, 36, 8):
+            grid[cy : cy + 2, cx : cx + 2] = "@"
+            grid[cy + 2 : cy + 4, cx + 2 : cx + 4] = "@"
+    rows = ["".join(r) for r in grid]
+    (tmp_path / "maps").mkdir()
+    _write_map(tmp_path / "maps" / "checker.map", rows)
+    monkeypatch.setenv(MOVINGAI_ENV, str(tmp_path / "maps"))
+    for k in range(10):
+        world, rng = _world("maps", k)
+        assert world.polygon.is_valid and world.name.startswith("maps-checker-")
+        assert len(world.holes) >= 4
+        Simulator.from_world(world, rng)
+
+
+@pytest.mark.skipif(not HAVE_MAPS, reason="shared/data is not beside the project")
+def test_map_obstacles_fit_their_passages() -> None:
+    names = set()
+    for k in range(40):
+        world, _ = _world("maps", k)
+        assert world.obstacles is not None
+        lo, hi = world.obstacles.radius
+        assert 0 < lo <= hi <= 1.0
+        names.add(world.name.split("-x")[0])
+    assert len(names) >= 5  # windows come from many maps

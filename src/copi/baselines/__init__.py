@@ -36,14 +36,14 @@ from copi.baselines._tangent_bug import TangentBug
 from copi.baselines._vfh import VFH
 
 __all__ = [
+    "CompassGuard",
     "DWA",
     "NAVGROUND_BEHAVIORS",
-    "VFH",
-    "CompassGuard",
     "NavgroundAgent",
     "NavgroundMissingError",
     "Replan",
     "Straight",
     "TangentBug",
+    "VFH",
     "navground_available",
 ]

@@ -19,8 +19,7 @@ from copi.experiments.methods import make_agent, method_spec
 from copi.geometry._arrays import positive_int
 from copi.learning import Capabilities
 from copi.online import ContextController, check_sensing
-from copi.world import RangeSensor, Simulator, World, load_worlds
-from copi.world._families import check_family, sample_world
+from copi.world import RangeSensor, Simulator, World, check_family, load_worlds, sample_world
 
 __all__ = [
     "EpisodeResult",

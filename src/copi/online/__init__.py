@@ -16,7 +16,6 @@ from copi.online._controller import ContextController, Decision
 from copi.online._strategies import GlobalStrategy, Greedy, Route, make_strategy
 
 __all__ = [
-    "SENSING_LEVELS",
     "Agent",
     "ContextController",
     "CopiAgent",
@@ -25,6 +24,7 @@ __all__ = [
     "Greedy",
     "Observation",
     "Route",
+    "SENSING_LEVELS",
     "Steering",
     "Task",
     "check_sensing",

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from copi.world._agents import RandomWalk
 from copi.world._env import NavigationEnv
-from copi.world._families import CROWD_OBSTACLES, FAMILIES, in_sight, sample_world
+from copi.world._families import CROWD_OBSTACLES, FAMILIES, check_family, in_sight, sample_world
 from copi.world._family_indoor import IndoorParams, indoor_world
 from copi.world._family_maps import MOVINGAI_ENV, MapsParams, map_window_world, movingai_dir
 from copi.world._family_polygon import PolygonParams, is_star_shaped, polygon_world
@@ -37,6 +37,7 @@ __all__ = [
     "StepResult",
     "World",
     "WorldParams",
+    "check_family",
     "draw_simulator",
     "draw_world",
     "in_sight",

@@ -17,13 +17,20 @@ from copi.world._family_polygon import polygon_world
 from copi.world._generate import random_world
 from copi.world._world import ObstacleSpec, World
 
-__all__ = ["CROWD_OBSTACLES", "FAMILIES", "in_sight", "sample_world"]
+__all__ = ["CROWD_OBSTACLES", "FAMILIES", "check_family", "in_sight", "sample_world"]
 
 FAMILIES = ("crowd", "indoor", "maps", "polygon", "star")
 """Names of the world families, sorted (see :func:`sample_world`)."""
 
 CROWD_OBSTACLES = ObstacleSpec(count=(25, 40), radius=(0.5, 1.0), speed=0.8)
 """Moving obstacles of the ``crowd`` family: denser and faster than the paper's."""
+
+
+def check_family(family: str) -> str:
+    """``family`` if it names a family; otherwise one clear error listing them."""
+    if family not in FAMILIES:
+        raise InvalidArgumentError(f"family must be one of {', '.join(FAMILIES)}; got {family!r}")
+    return family
 
 
 def sample_world(
@@ -84,8 +91,7 @@ def sample_world(
     ...     print(err)
     family must be one of crowd, indoor, maps, polygon, star; got 'castle'
     """
-    if family not in FAMILIES:
-        raise InvalidArgumentError(f"family must be one of {', '.join(FAMILIES)}; got {family!r}")
+    check_family(family)
     rng = as_generator(seed)
     if family == "star":
         w = random_world(rng)

@@ -423,6 +423,88 @@ def evaluate_command(
     )
 
 
+@app.command("benchmark")
+def benchmark_command(
+    output: Annotated[Path, typer.Option("-o", "--output", help="Directory for everything.")],
+    quick: Annotated[
+        bool, typer.Option("--quick", help="30 episodes per family (a few minutes).")
+    ] = False,
+    families: Annotated[
+        str | None, typer.Option("--families", help="Comma-separated families (default: all).")
+    ] = None,
+    methods: Annotated[
+        str | None,
+        typer.Option("--methods", help="Comma-separated methods, name or name@level."),
+    ] = None,
+    episodes: Annotated[
+        int | None, typer.Option("--episodes", min=1, help="Episodes per family (1000).")
+    ] = None,
+    seed: Annotated[int, typer.Option("--seed", min=0, help="Seed of the episodes.")] = 0,
+    workers: Annotated[int, typer.Option("--workers", min=1, help="Local processes.")] = 2,
+    scheduler: Annotated[
+        str | None, typer.Option("--scheduler", help="Dask scheduler tcp://HOST:PORT instead.")
+    ] = None,
+) -> None:
+    """Every method at its sensing levels on the same episodes of every world family, into
+    DIR/benchmark.sqlite (resumable), with DIR/benchmark.md: a table per family, paired
+    differences against copi with 95 % bootstrap intervals, and a figure."""
+    from copi.baselines import navground_available
+    from copi.experiments.benchmark import (
+        BENCHMARK_FAMILIES,
+        BenchmarkConfig,
+        ensure_capabilities,
+        run_benchmark,
+    )
+    from copi.experiments.benchmark_report import write_benchmark_report
+    from copi.experiments.methods import method_spec, parse_methods
+    from copi.world import check_family
+
+    fams = BENCHMARK_FAMILIES if families is None else tuple(
+        f.strip() for f in families.split(",") if f.strip()
+    )
+    for f in fams:
+        check_family(f)
+    chosen = parse_methods(methods)
+    if methods is None and not navground_available():
+        console.print(
+            "copi: navground is not installed: its peers are left out "
+            "(pip install 'copi[peers]' to include them)",
+            highlight=False,
+        )
+        chosen = [m for m in chosen if method_spec(m[0]).available]
+    for m, _ in chosen:
+        if not method_spec(m).available:
+            raise CopiError(
+                f"{m} needs navground, which is not installed: pip install 'copi[peers]'"
+            )
+    n = episodes if episodes is not None else (30 if quick else 1000)
+    if "maps" in fams:
+        from copi.world import movingai_dir
+
+        movingai_dir()  # refuse a missing data directory before anything is written
+    output.mkdir(parents=True, exist_ok=True)
+    presets = {p for m, _ in chosen if (p := method_spec(m).capabilities) is not None}
+    with progress() as bar:
+        task = bar.add_task("learn capabilities", total=len(presets))
+        caps = ensure_capabilities(output, presets, seed=seed)
+        bar.update(task, completed=len(presets))
+    config = BenchmarkConfig(
+        methods=tuple(chosen), families=tuple(fams), episodes=n, seed=seed, capabilities=caps
+    )
+    results = output / "benchmark.sqlite"
+    total = n * len(fams) * len(chosen)
+    _with_progress(
+        "benchmark: episodes",
+        total,
+        lambda report: run_benchmark(
+            config, results, workers=workers, scheduler=scheduler, progress=report
+        ),
+    )
+    report = write_benchmark_report(results, output)
+    out.print(report.read_text(encoding="utf-8").split("![")[0])
+    out.print(str(report))
+
+
 @app.command("pursuit")
 def pursuit_command(
     capabilities: Annotated[Path, typer.Argument(help="Capabilities file (.npz).")],

@@ -1,0 +1,241 @@
+"""The navigation benchmark: every method, at its sensing levels, on the same episodes of
+every world family, into one resumable results store.
+
+Episode k of a family draws its world, task and obstacles from ``default_rng([seed, k])``
+(the obstacles' random walk ignores the agent), so every method meets exactly the same
+episode and results can be compared pair by pair. One work item is one episode: the world
+is drawn and the optimum computed once, then each method still missing for it runs on a
+fresh copy of the simulator. Rows are committed as items come back; rerunning resumes.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import hashlib
+import json
+import math
+import os
+from collections.abc import Callable
+from concurrent.futures import as_completed
+from dataclasses import dataclass, field
+from functools import lru_cache
+from pathlib import Path
+from typing import Any
+
+from copi.errors import InvalidArgumentError
+from copi.experiments._episode import optimal_to_goal, run_agent
+from copi.experiments.methods import (
+    CAPABILITY_PRESETS,
+    make_agent,
+    method_spec,
+    parse_methods,
+)
+from copi.experiments.navigation import EpisodeResult, draw_episode, result_row
+from copi.geometry._arrays import positive_int
+from copi.learning import Capabilities
+from copi.world import check_family
+
+__all__ = [
+    "BENCHMARK_FAMILIES",
+    "BenchmarkConfig",
+    "benchmark_max_steps",
+    "ensure_capabilities",
+    "run_benchmark",
+]
+
+BENCHMARK_FAMILIES = ("star", "polygon", "indoor", "maps", "crowd")
+"""Families in the order the report shows them (the paper's first)."""
+
+
+def benchmark_max_steps(optimal: float) -> int:
+    """The step limit of an episode: three times its optimum plus 100 (1000 at most, and
+    when there is no optimum), so a stuck method costs little and a slow one has room."""
+    if not math.isfinite(optimal):
+        return 1000
+    return int(min(1000, math.ceil(3.0 * optimal + 100)))
+
+
+@dataclass(frozen=True)
+class BenchmarkConfig:
+    """One benchmark: which methods, at which levels, on which families, how many episodes."""
+
+    methods: tuple[tuple[str, str], ...]
+    """(method, sensing level) pairs (see :func:`copi.experiments.methods.parse_methods`)."""
+    families: tuple[str, ...] = BENCHMARK_FAMILIES
+    episodes: int = 1000
+    """Episodes per family (0 .. episodes - 1)."""
+    seed: int = 0
+    """Reported episodes use this seed; parameters were tuned on other seeds."""
+    end_on_contact: bool = True
+    """A contact with a moving obstacle ends the episode (a collision)."""
+    agent_radius: float = 0.3
+    capabilities: dict[str, str] = field(default_factory=dict)
+    """Capabilities file per preset ("faithful", "extended") for copi's methods."""
+    capabilities_sha: dict[str, str] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        positive_int(self.episodes, "episodes")
+        if not self.families:
+            raise InvalidArgumentError("families must name at least one family; got none")
+        for f in self.families:
+            check_family(f)
+        for m, level in self.methods:
+            parse_methods(f"{m}@{level}")
+        for m, _ in self.methods:
+            preset = method_spec(m).capabilities
+            if preset is not None and preset not in self.capabilities:
+                raise InvalidArgumentError(f"{m} needs the {preset!r} capabilities file")
+
+    def resolved(self) -> BenchmarkConfig:
+        """With the content hash of each capabilities file (checks each loads)."""
+        shas = {}
+        for preset, path in self.capabilities.items():
+            Capabilities.load(path)
+            with open(path, "rb") as fh:
+                shas[preset] = hashlib.sha256(fh.read()).hexdigest()
+        return dataclasses.replace(self, capabilities_sha=shas)
+
+    def identity(self, family: str, method: str, sensing: str) -> dict[str, Any]:
+        """What makes one (family, method, level) run the same run: not the number of
+        episodes (a longer run extends a shorter one) nor any path."""
+        spec = method_spec(method)
+        ident: dict[str, Any] = {
+            "family": family,
+            "method": method,
+            "sensing": sensing,
+            "seed": self.seed,
+            "end_on_contact": self.end_on_contact,
+            "agent_radius": self.agent_radius,
+            "params": spec.params,
+            "max_steps": "min(1000, ceil(3 optimal + 100))",
+        }
+        if spec.capabilities is not None:
+            ident["capabilities_sha"] = self.capabilities_sha.get(spec.capabilities, "")
+        return ident
+
+    def run_id(self, family: str, method: str, sensing: str) -> str:
+        text = json.dumps(self.identity(family, method, sensing), sort_keys=True)
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+@lru_cache(maxsize=4)
+def _caps(path: str, sha: str) -> Capabilities:
+    del sha  # part of the cache key
+    return Capabilities.load(path)
+
+
+def run_item(
+    config: BenchmarkConfig, family: str, k: int, todo: list[tuple[str, str, str]]
+) -> list[tuple[str, str, EpisodeResult]]:
+    """Episode k of ``family`` for each (run_id, method, level) in ``todo``."""
+    base = draw_episode(family, k, config.seed, agent_radius=config.agent_radius)
+    optimal = optimal_to_goal(base.world, base)
+    max_steps = benchmark_max_steps(optimal)
+    out = []
+    for run_id, method, level in todo:
+        preset = method_spec(method).capabilities
+        caps = None
+        if preset is not None:
+            caps = _caps(config.capabilities[preset], config.capabilities_sha.get(preset, ""))
+        sim = copy.deepcopy(base)
+        agent = make_agent(method, caps)
+        res = run_agent(
+            agent, sim, sensing=level, max_steps=max_steps, end_on_contact=config.end_on_contact
+        )
+        out.append(
+            (run_id, method, result_row(sim, k, config.seed, optimal, res, family=family,
+                                        sensing=level))
+        )  # fmt: skip
+    return out
+
+
+def run_items(
+    config: BenchmarkConfig, items: list[tuple[str, int, list[tuple[str, str, str]]]]
+) -> list[tuple[str, str, EpisodeResult]]:
+    """Several items in one task (fewer round trips to the workers)."""
+    return [row for f, k, todo in items for row in run_item(config, f, k, todo)]
+
+
+def ensure_capabilities(
+    directory: str | os.PathLike[str], presets: set[str], *, seed: int = 0
+) -> dict[str, str]:
+    """The capabilities file of each preset in ``directory``, learnt (seed ``seed``) when
+    missing; returns {preset: path}."""
+    from copi.learning import learn
+
+    d = Path(directory)
+    d.mkdir(parents=True, exist_ok=True)
+    paths = {}
+    for preset in sorted(presets):
+        path = d / f"capabilities-{preset}.npz"
+        if not path.exists():
+            params = dataclasses.replace(CAPABILITY_PRESETS[preset], seed=seed)
+            learn(params).save(path)
+        paths[preset] = str(path)
+    return paths
+
+
+def run_benchmark(
+    config: BenchmarkConfig,
+    output: str | os.PathLike[str],
+    *,
+    workers: int = 1,
+    scheduler: str | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> dict[tuple[str, str, str], str]:
+    """Run (or resume) the benchmark into the results file ``output``; returns the run id
+    of each (family, method, level)."""
+    from copi.experiments.executor import InlineExecutor, make_executor
+    from copi.experiments.store import ResultsStore
+
+    config = config.resolved()
+    runs: dict[tuple[str, str, str], str] = {}
+    with ResultsStore(output) as store:
+        missing: dict[tuple[str, int], list[tuple[str, str, str]]] = {}
+        total = 0
+        for family in config.families:
+            for method, level in config.methods:
+                rid = config.run_id(family, method, level)
+                runs[(family, method, level)] = rid
+                ident = config.identity(family, method, level)
+                store.begin(rid, "benchmark", method, ident)
+                done = store.done(rid, method)
+                for k in range(config.episodes):
+                    total += 1
+                    if k not in done:
+                        missing.setdefault((family, k), []).append((rid, method, level))
+        items = [(f, k, todo) for (f, k), todo in missing.items()]
+        finished = total - sum(len(t) for _, _, t in items)
+        if progress is not None:
+            progress(finished, total)
+
+        def commit(rows: list[tuple[str, str, EpisodeResult]]) -> None:
+            nonlocal finished
+            for rid, method, result in rows:
+                store.add(rid, "benchmark", method, result)
+                finished += 1
+            if progress is not None:
+                progress(finished, total)
+
+        if not items:
+            return runs
+        with make_executor(workers, scheduler) as pool:
+            if isinstance(pool, InlineExecutor):
+                for f, k, todo in items:
+                    commit(run_item(config, f, k, todo))
+                return runs
+            n_workers = workers if scheduler is None else 4
+            size = max(1, min(8, len(items) // (4 * n_workers)))
+            futures = [
+                pool.submit(run_items, config, items[i : i + size])
+                for i in range(0, len(items), size)
+            ]
+            try:
+                for fut in as_completed(futures):
+                    commit(fut.result())
+            except BaseException:
+                for fut in futures:
+                    fut.cancel()
+                raise
+    return runs

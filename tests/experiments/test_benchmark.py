@@ -1,0 +1,165 @@
+from __future__ import annotations
+
+import sqlite3
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from copi.cli.main import main
+from copi.experiments.benchmark import BenchmarkConfig, benchmark_max_steps, run_benchmark
+from copi.experiments.benchmark_report import paired_difference, write_benchmark_report
+from copi.experiments.methods import parse_methods
+from copi.experiments.store import ResultsStore
+from copi.learning import LearnParams, learn
+
+TIMINGS = {"decision_us", "strategy_us"}
+
+
+def test_paired_difference_against_a_hand_computed_case() -> None:
+    # Success of A and B on five episodes: A wins 2, loses 0: +40 points.
+    a = [1, 1, 1, 0, 1]
+    b = [1, 0, 1, 0, 0]
+    d = paired_difference(a, b, resamples=4000, seed=1)
+    assert d.estimate == pytest.approx(0.4) and d.n == 5
+    # The bootstrap of a mean of differences in {0, 1}: the interval is within [0, 1]
+    # and holds the estimate; with the differences all equal it is that value exactly.
+    assert 0.0 <= d.low <= 0.4 <= d.high <= 1.0
+    same = paired_difference([3.0, 4.0, 5.0], [2.0, 3.0, 4.0])
+    assert (same.estimate, same.low, same.high) == pytest.approx((1.0, 1.0, 1.0))
+    assert same.excludes_zero
+    # Medians: A = [1, 2, 10], B = [0, 0, 0] -> median difference 2.
+    med = paired_difference([1.0, 2.0, 10.0], [0.0, 0.0, 0.0], statistic="median")
+    assert med.estimate == 2.0 and med.low >= 1.0 and med.high <= 10.0
+    # Large sample: the percentile interval agrees with the normal one (1.96 s / sqrt n).
+    rng = np.random.default_rng(0)
+    x = rng.random(4000) < 0.7
+    y = rng.random(4000) < 0.6
+    d = paired_difference(x, y, resamples=2000)
+    diff = x.astype(float) - y.astype(float)
+    half = 1.96 * diff.std(ddof=1) / np.sqrt(len(diff))
+    assert d.low == pytest.approx(diff.mean() - half, abs=0.004)
+    assert d.high == pytest.approx(diff.mean() + half, abs=0.004)
+    assert not paired_difference([0, 1], [1, 0]).excludes_zero
+    with pytest.raises(ValueError, match="paired samples"):
+        paired_difference([1, 2], [1])
+
+
+def test_step_limit() -> None:
+    assert benchmark_max_steps(10.0) == 130
+    assert benchmark_max_steps(float("nan")) == 1000
+    assert benchmark_max_steps(500.0) == 1000
+
+
+def test_parse_methods() -> None:
+    assert parse_methods("dwa") == [("dwa", "sensor"), ("dwa", "map")]
+    assert parse_methods("copi-extended@map,replan") == [
+        ("copi-extended", "map"),
+        ("replan", "oracle"),
+    ]
+    with pytest.raises(ValueError, match="replan needs sensing level 'oracle' or above"):
+        parse_methods("replan@sensor")
+
+
+@pytest.fixture(scope="module")
+def caps(tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
+    d = tmp_path_factory.mktemp("caps")
+    out = {}
+    for preset, directions in (("extended", 16),):
+        path = d / f"capabilities-{preset}.npz"
+        learn(LearnParams(worlds=12, steps=200, seed=1, directions=directions)).save(path)
+        out[preset] = str(path)
+    return out
+
+
+def _rows(path: Path) -> list[dict]:
+    with ResultsStore(path) as store:
+        return [
+            {k: v for k, v in r.items() if k not in TIMINGS}
+            for r in sorted(store.episodes(), key=lambda r: (r["run_id"], r["episode"]))
+        ]
+
+
+def test_every_method_meets_the_same_episodes_and_runs_resume(
+    caps: dict[str, str], tmp_path: Path
+) -> None:
+    methods = tuple(parse_methods("copi-extended@map,straight@map,compass-guard@sensor"))
+    cfg = BenchmarkConfig(methods=methods, families=("star", "indoor"), episodes=4,
+                          capabilities=caps)  # fmt: skip
+    out = tmp_path / "b.sqlite"
+    runs = run_benchmark(cfg, out, workers=1)
+    assert len(runs) == 6
+    rows = _rows(out)
+    assert len(rows) == 24
+    by = {}
+    for r in rows:
+        by.setdefault((r["family"], r["episode"]), []).append(r)
+        assert r["outcome"] in ("success", "collision", "timeout")
+        assert r["success"] + r["collided"] + r["timed_out"] == 1
+        if r["success"]:
+            assert r["excess"] >= 0.0
+    for group in by.values():  # one world and one optimum per episode, whatever the method
+        assert len({r["world"] for r in group}) == 1
+        assert len({r["optimal_length"] for r in group}) == 1
+    # Interrupted: lose some rows; rerun (with two workers) -> the same table.
+    with sqlite3.connect(out) as db:
+        db.execute("DELETE FROM episodes WHERE episode >= 2 AND method = 'straight'")
+    run_benchmark(cfg, out, workers=2)
+    assert _rows(out) == rows
+    # A longer run extends the shorter one (episodes are not part of a run's identity).
+    longer = BenchmarkConfig(methods=methods, families=("star",), episodes=6, capabilities=caps)
+    run_benchmark(longer, out, workers=1)
+    assert len(_rows(out)) == 24 + 3 * 2
+    report = write_benchmark_report(out, tmp_path / "rep")
+    text = report.read_text()
+    assert "## star (6 episodes)" in text and "## indoor (4 episodes)" in text
+    assert "| compass-guard | sensor |" in text
+    assert (tmp_path / "rep" / "benchmark_success_excess.png").stat().st_size > 10_000
+
+
+def _cli(args: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, str]:
+    try:
+        main(args)
+        code = 0
+    except SystemExit as exc:
+        code = int(exc.code or 0)
+    cap = capsys.readouterr()
+    return code, cap.out, cap.err
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--families", "moon"], "family must be one of crowd, indoor, maps, polygon, star"),
+        (["--methods", "astar"], "method must be one of copi-faithful"),
+        (["--methods", "replan@map"], "replan needs sensing level 'oracle' or above"),
+        (["--methods", "dwa@psychic"], "sensing level must be one of sensor, map, oracle"),
+    ],
+)
+def test_benchmark_bad_input_writes_nothing(
+    args: list[str], message: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    code, _, err = _cli(["benchmark", "-o", str(tmp_path / "b"), *args], capsys)
+    assert code == 2 and message in err and "Traceback" not in err, err
+    assert not (tmp_path / "b").exists()
+
+
+def test_benchmark_without_navground(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import sys
+
+    monkeypatch.setitem(sys.modules, "navground", None)
+    monkeypatch.setitem(sys.modules, "navground.core", None)
+    code, _, err = _cli(
+        ["benchmark", "-o", str(tmp_path / "b"), "--methods", "navground-hl"], capsys
+    )
+    assert code == 2 and "navground-hl needs navground, which is not installed" in err
+    assert not (tmp_path / "b").exists()
+    code, out, err = _cli(
+        ["benchmark", "-o", str(tmp_path / "c"), "--methods", "straight@map,dwa@map",
+         "--families", "star", "--episodes", "2", "--workers", "1"],
+        capsys,
+    )  # fmt: skip
+    assert code == 0, err
+    assert "| straight | map |" in out and "| dwa | map |" in out

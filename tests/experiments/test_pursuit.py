@@ -19,7 +19,37 @@ def test_games_depend_on_their_index_only(caps_path: str) -> None:
     cfg = PursuitConfig(caps_path, games=3, horizon=120).resolved()
     a, b = run_game(cfg, 2), run_game(cfg, 2)
     assert a == b
-    assert a.survival == (a.capture_time if a.captured else 120)
+    assert a.survival == (a.capture_time if a.captured else a.survival)
+    assert a.outcome in ("captured", "collision", "escaped")
+
+
+def test_a_contact_ends_the_game_as_a_loss_and_the_rows_differ(caps_path: str) -> None:
+    n = 16
+    static = PursuitConfig(caps_path, evader="game", dynamic=False, games=n, horizon=150)
+    dynamic = PursuitConfig(caps_path, evader="game", dynamic=True, games=n, horizon=150)
+    old = PursuitConfig(caps_path, evader="game", dynamic=True, games=n, horizon=150,
+                        contact_ends=False)  # fmt: skip
+    rows = {
+        name: [run_game(cfg.resolved(), k) for k in range(n)]
+        for name, cfg in (("static", static), ("dynamic", dynamic), ("old", old))
+    }
+    for r in rows["static"]:
+        assert r.contacts == 0 and r.outcome != "collision"
+    collided = [r for r in rows["dynamic"] if r.outcome == "collision"]
+    assert collided, "the game evader ignores the discs: some games must end in a contact"
+    for r in collided:
+        assert r.contacts == 1 and not r.captured and r.survival < 150
+    for r in rows["dynamic"]:
+        assert r.outcome == ("captured" if r.captured else "collision" if r.contacts else
+                             "escaped")  # fmt: skip
+    # The older rule lets the game go on: the same games reach capture or the horizon.
+    for new, was in zip(rows["dynamic"], rows["old"], strict=True):
+        if new.outcome == "collision":
+            assert was.contacts >= 1 and was.survival >= new.survival
+    # So the stationary and dynamic rows now differ in what they report, not only in
+    # their contact counts.
+    outcome = {name: [r.outcome for r in rs] for name, rs in rows.items()}
+    assert outcome["static"] != outcome["dynamic"]
 
 
 def test_the_game_evader_meets_obstacles_the_capability_evader_avoids(caps_path: str) -> None:

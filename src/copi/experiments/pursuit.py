@@ -48,6 +48,10 @@ class PursuitConfig(RunIdentity):
     capture_radius: float = 0.8
     record: int = 3
     """Games (the first ones) whose trajectories are stored for Fig. 5."""
+    contact_ends: bool = True
+    """A contact with a moving obstacle ends the game as a loss for the evader (outcome
+    "collision"), as a collision ends a navigation episode; False lets the game go on
+    (the older rule, under which a contact had no consequence)."""
     capabilities_sha: str = field(default="", compare=False)
 
     def __post_init__(self) -> None:
@@ -92,6 +96,9 @@ class GameRow:
     closest: float
     gamma: float
     beta: float
+    outcome: str = "escaped"
+    """"captured", "collision" (touched a moving obstacle first; ends the game when
+    contacts end games) or "escaped" (survived the horizon). Exclusive."""
     trajectory: dict[str, Any] | None = None
 
 
@@ -119,6 +126,8 @@ def run_game(config: PursuitConfig, k: int) -> GameRow:
             static = sensor.scan(game.world, game.sim.position) if config.guard > 0 else None
             velocity, _ = controller.decide(game.sim.ranges, wish, static=static)
         game.step(velocity)
+        if config.contact_ends and game.contacts and not game.captured:
+            break
     trajectory = None
     if game.record:
         trajectory = {
@@ -129,6 +138,13 @@ def run_game(config: PursuitConfig, k: int) -> GameRow:
             "radii": game.sim.radii.tolist(),
             "captured": game.captured,
         }
+    if game.captured:
+        outcome, survival = "captured", game.capture_time
+    elif game.contacts:
+        outcome = "collision"
+        survival = float(game.t) if config.contact_ends else float(config.horizon)
+    else:
+        outcome, survival = "escaped", float(config.horizon)
     return GameRow(
         game=k,
         world=game.world.name,
@@ -136,11 +152,12 @@ def run_game(config: PursuitConfig, k: int) -> GameRow:
         dynamic=config.dynamic,
         captured=game.captured,
         capture_time=game.capture_time,
-        survival=game.capture_time if game.captured else float(config.horizon),
+        survival=survival,
         contacts=game.contacts,
         closest=game.closest,
         gamma=params.gamma,
         beta=params.beta,
+        outcome=outcome,
         trajectory=trajectory,
     )
 

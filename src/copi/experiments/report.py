@@ -142,6 +142,11 @@ def summarize_games(rows: list[dict[str, Any]]) -> dict[str, Any]:
     return {
         "games": n,
         "capture": float(np.mean([r["captured"] for r in rows])),
+        "collision": float(np.mean([r.get("outcome") == "collision" for r in rows])),
+        "escaped": float(
+            np.mean([r.get("outcome", "escaped" if not r["captured"] else "") == "escaped"
+                     for r in rows])
+        ),  # fmt: skip
         "survival_mean": float(survival.mean()),
         "survival_median": float(np.median(survival)),
         "contact_games": float(np.mean([r["contacts"] > 0 for r in rows])),
@@ -253,16 +258,19 @@ def write_report(results: list[str | os.PathLike[str]], directory: str | os.Path
             "",
             "The evader plays the game's strategy; the capability evader instantiates it "
             "through the learnt capabilities (walls and moving obstacles avoided), the game "
-            "evader uses it as its velocity. Survival in time steps (the horizon when not "
-            "captured).",
+            "evader uses it as its velocity. A contact with a moving obstacle ends the game "
+            "as a loss for the evader (collision), as in navigation. Outcomes are exclusive: "
+            "capture, collision, escape (the horizon survived). Survival in time steps until "
+            "capture or collision (the horizon on escape).",
             "",
-            "| method | games | capture | mean survival | median survival "
+            "| method | games | capture | collision | escape | mean survival | median survival "
             "| games with contact | contacts / 100 steps |",
-            "|---|---|---|---|---|---|---|",
+            "|---|---|---|---|---|---|---|---|---|",
         ]
         for g in games:
             lines.append(
                 f"| {g['method']} | {g['games']} | {100 * g['capture']:.1f} % | "
+                f"{100 * g['collision']:.1f} % | {100 * g['escaped']:.1f} % | "
                 f"{g['survival_mean']:.1f} | {g['survival_median']:.1f} | "
                 f"{100 * g['contact_games']:.1f} % | {g['contacts_per_100']:.2f} |"
             )

@@ -77,6 +77,7 @@ CREATE TABLE IF NOT EXISTS games (
     closest REAL,
     gamma REAL NOT NULL,
     beta REAL NOT NULL,
+    outcome TEXT,
     PRIMARY KEY (run_id, method, game)
 );
 CREATE TABLE IF NOT EXISTS trajectories (
@@ -90,7 +91,7 @@ CREATE TABLE IF NOT EXISTS trajectories (
 
 GAME_COLUMNS = [
     "game", "world", "seed", "dynamic", "captured", "capture_time", "survival", "contacts",
-    "closest", "gamma", "beta",
+    "closest", "gamma", "beta", "outcome",
 ]  # fmt: skip
 
 EPISODE_COLUMNS = [
@@ -163,6 +164,8 @@ class ResultsStore:
         for column, kind in _ADDED_EPISODE_COLUMNS.items():
             if column not in have:
                 self.db.execute(f"ALTER TABLE episodes ADD COLUMN {column} {kind}")
+        if "outcome" not in {r[1] for r in self.db.execute("PRAGMA table_info(games)")}:
+            self.db.execute("ALTER TABLE games ADD COLUMN outcome TEXT")
         self.db.commit()
 
     def close(self) -> None:

@@ -1,0 +1,124 @@
+"""Tune every method's parameters on validation episodes (seed 1), disjoint from the
+reported ones (seed 0), with the same budget of four settings per method.
+
+    python benchmarks/tune.py --episodes 100 --families polygon,crowd --workers 2
+
+Prints, per method, success and median excess of each setting, and the chosen one (the
+highest success; within one point, the lower median excess). The chosen values are the
+``params`` of ``copi.experiments.methods.METHODS``; docs/tuning.md keeps the last table.
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import math
+import sys
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import numpy as np
+
+from copi.experiments._episode import optimal_to_goal, run_agent
+from copi.experiments.benchmark import benchmark_max_steps, ensure_capabilities
+from copi.experiments.methods import make_agent, method_spec
+from copi.experiments.navigation import draw_episode
+from copi.learning import Capabilities
+
+GRID: dict[str, list[dict[str, float]]] = {
+    "copi-extended": [{"guard": g} for g in (0.9, 1.05, 1.2, 1.4)],
+    "compass-guard": [{"guard": g} for g in (0.9, 1.05, 1.2, 1.4)],
+    "vfh": [
+        {"threshold": 0.5, "safety": 0.5},
+        {"threshold": 0.3, "safety": 0.8},
+        {"threshold": 0.2, "safety": 1.0},
+        {"threshold": 0.4, "safety": 1.2},
+    ],
+    "dwa": [
+        {"margin": 0.3, "clearance_weight": 0.3},
+        {"margin": 0.6, "clearance_weight": 0.3},
+        {"margin": 0.9, "clearance_weight": 0.5},
+        {"margin": 1.2, "clearance_weight": 0.5},
+    ],
+    "tangent-bug": [
+        {"margin": 0.3, "follow": 1.2},
+        {"margin": 0.5, "follow": 1.0},
+        {"margin": 0.6, "follow": 1.5},
+        {"margin": 0.9, "follow": 1.8},
+    ],
+    "replan": [{"inflate": v} for v in (0.3, 0.6, 1.0, 1.5)],
+    "navground-hrvo": [{"safety_margin": v} for v in (0.1, 0.3, 0.6, 1.0)],
+    "navground-hl": [{"safety_margin": v} for v in (0.1, 0.3, 0.6, 1.0)],
+}
+SEED = 1
+CAPS: dict[str, str] = {}
+
+
+def _episode(args: tuple[str, int]) -> list[tuple[str, int, str, float]]:
+    family, k = args
+    base = draw_episode(family, k, SEED)
+    optimal = optimal_to_goal(base.world, base)
+    steps = benchmark_max_steps(optimal)
+    out = []
+    for method, settings in GRID.items():
+        spec = method_spec(method)
+        if not spec.available:
+            continue
+        level = "oracle" if spec.sensing == "oracle" else "map"
+        caps = Capabilities.load(CAPS[spec.capabilities]) if spec.capabilities else None
+        for i, p in enumerate(settings):
+            res = run_agent(make_agent(method, caps, **p), copy.deepcopy(base), sensing=level,
+                            max_steps=steps)  # fmt: skip
+            ex = res.path_length / optimal - 1 if res.outcome == "success" else math.nan
+            out.append((method, i, res.outcome, ex))
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--episodes", type=int, default=100)
+    ap.add_argument("--families", default="polygon,crowd")
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--caps-dir", default="results/tuning")
+    ap.add_argument("--out", default="docs/tuning.md")
+    a = ap.parse_args()
+    CAPS.update(ensure_capabilities(a.caps_dir, {"extended"}))
+    items = [(f, k) for f in a.families.split(",") for k in range(a.episodes)]
+    rows: list[tuple[str, int, str, float]] = []
+    with ProcessPoolExecutor(a.workers) as pool:
+        for i, r in enumerate(pool.map(_episode, items, chunksize=4)):
+            rows += r
+            print(f"\r{i + 1}/{len(items)}", end="", file=sys.stderr, flush=True)
+    print(file=sys.stderr)
+    lines = [
+        f"# Tuning (validation seed {SEED}, families {a.families}, {a.episodes} episodes "
+        "each, level map; oracle for oracle methods)",
+        "",
+        "| method | setting | success | collision | median excess | chosen |",
+        "|---|---|---|---|---|---|",
+    ]
+    for method, settings in GRID.items():
+        stats = []
+        for i, p in enumerate(settings):
+            mine = [r for r in rows if r[0] == method and r[1] == i]
+            if not mine:
+                continue
+            succ = np.mean([r[2] == "success" for r in mine])
+            coll = np.mean([r[2] == "collision" for r in mine])
+            ex = [r[3] for r in mine if r[2] == "success"]
+            stats.append((i, p, succ, coll, float(np.median(ex)) if ex else math.nan))
+        if not stats:
+            continue
+        top = max(s[2] for s in stats)
+        best = min((s for s in stats if s[2] >= top - 0.01), key=lambda s: s[4])
+        for i, p, succ, coll, ex in stats:
+            mark = "**yes**" if i == best[0] else ""
+            lines.append(f"| {method} | {p} | {100 * succ:.1f} % | {100 * coll:.1f} % | "
+                         f"{100 * ex:.1f} % | {mark} |")  # fmt: skip
+    text = "\n".join(lines) + "\n"
+    Path(a.out).write_text(text, encoding="utf-8")
+    print(text)
+
+
+if __name__ == "__main__":
+    main()

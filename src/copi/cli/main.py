@@ -522,6 +522,13 @@ def pursuit_command(
     scheduler: Annotated[
         str | None, typer.Option("--scheduler", help="Dask scheduler tcp://HOST:PORT instead.")
     ] = None,
+    guard: Annotated[
+        float, typer.Option("--guard", min=0.0, help="The capability evader's guard.")
+    ] = 1.2,
+    contact_continues: Annotated[
+        bool,
+        typer.Option("--contact-continues", help="A contact does not end the game (older rule)."),
+    ] = False,
 ) -> None:
     """Experiment 2 (paper §IV, Fig. 5): the homicidal chauffeur. A faster car with a
     turn radius chases the agent; the agent plays the game's strategy through its
@@ -532,7 +539,7 @@ def pursuit_command(
 
     config = PursuitConfig(
         capabilities=str(capabilities), evader=evader, dynamic=dynamic, games=games,
-        seed=seed, horizon=horizon,
+        seed=seed, horizon=horizon, guard=guard, contact_ends=not contact_continues,
     )  # fmt: skip
     output.parent.mkdir(parents=True, exist_ok=True)
     run_id = _with_progress(
@@ -546,6 +553,7 @@ def pursuit_command(
         s = summarize_games(store.games(run_id))
     out.print(
         f"{output}: {config.method}: {s['games']} games, capture {100 * s['capture']:.1f} %, "
+        f"collision {100 * s['collision']:.1f} %, "
         f"mean survival {s['survival_mean']:.1f} steps, games with contact "
         f"{100 * s['contact_games']:.1f} %"
     )

@@ -105,8 +105,8 @@ def main() -> None:
                 continue
             succ = np.mean([r[2] == "success" for r in mine])
             coll = np.mean([r[2] == "collision" for r in mine])
-            ex = [r[3] for r in mine if r[2] == "success"]
-            stats.append((i, p, succ, coll, float(np.median(ex)) if ex else math.nan))
+            ex = [r[3] for r in mine if r[2] == "success" and math.isfinite(r[3])]
+            stats.append((i, p, succ, coll, float(np.median(ex)) if ex else math.inf))
         if not stats:
             continue
         top = max(s[2] for s in stats)

@@ -630,12 +630,42 @@ def reproduce_command(
                     bar.update(task, completed=done)
 
                 pursue(game_cfg, results, workers=workers, progress=advance_games)
+        # The benchmark's quick version: every method on the same episodes of every family.
+        from copi.baselines import navground_available
+        from copi.experiments.benchmark import (
+            BENCHMARK_FAMILIES,
+            BenchmarkConfig,
+            ensure_capabilities,
+            run_benchmark,
+        )
+        from copi.experiments.benchmark_report import write_benchmark_report
+        from copi.experiments.methods import method_spec, parse_methods
+
+        chosen = [m for m in parse_methods(None) if method_spec(m[0]).available]
+        if not navground_available():
+            console.print("copi: navground is not installed: its peers are left out of the "
+                          "benchmark (pip install 'copi[peers]')", highlight=False)  # fmt: skip
+        bench = BenchmarkConfig(
+            methods=tuple(chosen), families=BENCHMARK_FAMILIES, episodes=10 if quick else 30,
+            seed=seed, capabilities=ensure_capabilities(output, {"faithful", "extended"},
+                                                        seed=seed),
+        )  # fmt: skip
+        bench_task = bar.add_task(
+            "benchmark (quick)", total=bench.episodes * len(chosen) * len(BENCHMARK_FAMILIES)
+        )
+
+        def advance_bench(done: int, total: int, task: Any = bench_task) -> None:
+            bar.update(task, completed=done)
+
+        run_benchmark(bench, output / "benchmark.sqlite", workers=workers, progress=advance_bench)
+    write_benchmark_report(output / "benchmark.sqlite", output)
     report = write_report([str(results)], output)
     text = report.read_text(encoding="utf-8")
     out.print(text.split("Runs:")[0])
     if "# Experiment 2" in text:
         out.print("# Experiment 2" + text.split("# Experiment 2")[1].split("![")[0])
     out.print(str(report))
+    out.print(str(output / "benchmark.md"))
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -79,7 +79,10 @@ def paired_difference(
 def _summary(rows: list[dict[str, Any]]) -> dict[str, Any]:
     n = len(rows)
     out = np.array([r["outcome"] for r in rows])
-    ex = np.array([r["excess"] for r in rows if r["outcome"] == "success"], dtype=float)
+    ex = np.array(
+        [r["excess"] for r in rows if r["outcome"] == "success" and r["excess"] is not None],
+        dtype=float,
+    )
     dec = np.array([r["decision_us"] for r in rows], dtype=float)
     ttg = np.array([r["time_to_goal"] for r in rows if r["outcome"] == "success"], dtype=float)
     clear = np.array([r["min_clearance"] for r in rows if r["min_clearance"] is not None])
@@ -93,6 +96,7 @@ def _summary(rows: list[dict[str, Any]]) -> dict[str, Any]:
         "time_to_goal": float(np.median(ttg)) if len(ttg) else math.nan,
         "clearance": float(np.median(clear)) if len(clear) else math.nan,
         "decisions_per_s": 1e6 / float(np.median(dec)) if len(dec) else math.nan,
+        "no_optimum": int(sum(r["optimal_length"] is None for r in rows)),
     }
 
 
@@ -117,7 +121,11 @@ def _pair(
     common = sorted(set(a) & set(b))
     sa = [a[k]["outcome"] == "success" for k in common]
     sb = [b[k]["outcome"] == "success" for k in common]
-    both = [k for k in common if a[k]["outcome"] == "success" and b[k]["outcome"] == "success"]
+    both = [
+        k for k in common
+        if a[k]["outcome"] == "success" and b[k]["outcome"] == "success"
+        and a[k]["excess"] is not None and b[k]["excess"] is not None
+    ]  # fmt: skip
     ea = [a[k]["excess"] for k in both]
     eb = [b[k]["excess"] for k in both]
     return (
@@ -212,9 +220,15 @@ def write_benchmark_report(
         keys = sorted(g, key=lambda k: (order.get(k[0], 99), SENSING_LEVELS.index(k[1])))
         table[family] = {k: _summary(g[k]) for k in keys}
         n = max(s["n"] for s in table[family].values())
+        no_opt = max(s["no_optimum"] for s in table[family].values())
         lines += [
             f"## {family} ({n} episodes)",
             "",
+            *(
+                [f"{no_opt} episodes have no path on the frozen snapshot (moving obstacles "
+                 "block every passage at t = 0): no excess is measured for them.", ""]
+                if no_opt else []
+            ),  # fmt: skip
             "| method | sensing | success | collision | timeout | median excess | p90 excess "
             "| median steps to goal | decisions / s | Δ success | Δ median excess | |",
             "|---|---|---|---|---|---|---|---|---|---|---|---|",

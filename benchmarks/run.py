@@ -8,6 +8,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from benchmarks import (  # noqa: E402
+    bench_baselines,
     bench_games,
     bench_learning,
     bench_online,
@@ -23,6 +24,7 @@ def main() -> int:
         "learning": bench_learning.main(),
         "online": bench_online.main(),
         "games": bench_games.main(),
+        "baselines": bench_baselines.main(),
     }
     missed = [name for name, ok in results.items() if not ok]
     print("all goals met" if not missed else f"goals missed in: {', '.join(missed)}")

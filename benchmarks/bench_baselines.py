@@ -1,0 +1,47 @@
+"""Decision cost of every method, as a ratio to copi's decision in the same run.
+
+Each method drives the same 20 episodes of the ``polygon`` family (seed 3, not a
+reported seed) at its first benchmark level; a method's cost is the median over episodes
+of its mean wall time per decision (global direction included, the scan excluded). The
+"×" column is copi-extended's cost over the method's (below 1: the method is slower). No
+goal: the table says what each method costs next to copi.
+"""
+
+from __future__ import annotations
+
+import copy
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from benchmarks._timing import Timing, report
+from copi.experiments._episode import optimal_to_goal, run_agent
+from copi.experiments.benchmark import benchmark_max_steps, ensure_capabilities
+from copi.experiments.methods import METHODS, make_agent
+from copi.experiments.navigation import draw_episode
+from copi.learning import Capabilities
+
+
+def main() -> bool:
+    caps_paths = ensure_capabilities(Path(tempfile.mkdtemp()), {"faithful", "extended"})
+    caps = {k: Capabilities.load(v) for k, v in caps_paths.items()}
+    episodes = [draw_episode("polygon", k, 3) for k in range(20)]
+    limits = [benchmark_max_steps(optimal_to_goal(sim.world, sim)) for sim in episodes]
+    rows = []
+    for name, spec in METHODS.items():
+        if not spec.available:
+            continue
+        level = spec.levels[-1]
+        costs = []
+        for sim, limit in zip(episodes, limits, strict=True):
+            agent = make_agent(name, caps.get(spec.capabilities or ""))
+            costs.append(run_agent(agent, copy.deepcopy(sim), sensing=level,
+                                   max_steps=limit).decision_us)  # fmt: skip
+        rows.append(Timing(f"{name} ({level})", float(np.median(costs)) * 1e-6))
+    return report("decision cost per method (polygon, 20 episodes)", rows, "copi-extended (map)",
+                  {})  # fmt: skip
+
+
+if __name__ == "__main__":
+    main()

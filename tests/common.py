@@ -30,4 +30,14 @@ PILLARS = World(
 )
 """A room with three convex holes (two squares and a triangle)."""
 
-NAMED = {w.name: w for w in (SQUARE_ROOM, CORRIDOR, U_TRAP, PILLARS)}
+WALL = World(
+    [[0, 0], [30, 0], [30, 30], [0, 30]],
+    [[[9, 14], [21, 14], [21, 15], [9, 15]]],
+    name="wall",
+    start=[15, 5],
+    goal=[15, 25],
+)
+"""A 30 x 30 room with a 12-long wall across the straight line from start to goal; the
+way round is past either end (the wall is 9 ahead of the start, its ends 11 aside)."""
+
+NAMED = {w.name: w for w in (SQUARE_ROOM, CORRIDOR, U_TRAP, PILLARS, WALL)}

@@ -9,8 +9,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from copi.errors import CopiError
-from copi.online import Observation, Steering, Task
+from copi.errors import CopiError, InvalidArgumentError
+from copi.online import Observation, Steering, Task, check_sensing
 
 __all__ = ["NAVGROUND_BEHAVIORS", "NavgroundAgent", "NavgroundMissingError", "navground_available"]
 
@@ -69,11 +69,15 @@ class NavgroundAgent:
         self.horizon = float(horizon)
 
     def reset(self, task: Task) -> None:
+        check_sensing(task.sensing, self.sensing, method=self.name)
         from navground import core
 
         self._core = core
         if task.world is None:
-            raise CopiError(f"{self.name} needs sensing level 'oracle'")
+            raise InvalidArgumentError(
+                f"{self.name} needs the task's world (level 'oracle'); got a task at "
+                f"{task.sensing!r} without it"
+            )
         b: Any = core.Behavior.make_type(self.behavior)
         b.kinematics = core.kinematics.OmnidirectionalKinematics(max_speed=1.0)
         b.radius = task.agent_radius

@@ -10,10 +10,15 @@ from numpy.typing import NDArray
 
 from copi.baselines._common import unit
 from copi.errors import CopiError, InvalidArgumentError
-from copi.online import Observation, Task
+from copi.online import Observation, Task, check_sensing
 from copi.planning import shortest_path
 
 __all__ = ["Replan"]
+
+_PAD = 0.01
+"""Added to the agent's radius when planning: the planner's circles are circumscribed
+polygons whose edges touch the true circle, and a path along such an edge grazes a wall's
+corner exactly, where the simulator stops the agent."""
 
 
 class Replan:
@@ -24,7 +29,9 @@ class Replan:
 
     When the agent stands inside an inflated obstacle, or the goal does, the plan is made
     with the obstacles at their true size; failing that, the agent steps away from the
-    nearest obstacle.
+    nearest obstacle. Plans are made for the agent's disc grown by a hundredth of a step
+    (a path must not graze a wall's corner, which would stop the agent there), or at its
+    true size when it rests closer than that to a wall.
 
     Parameters
     ----------
@@ -52,8 +59,12 @@ class Replan:
         self.quad_segs = int(quad_segs)
 
     def reset(self, task: Task) -> None:
+        check_sensing(task.sensing, self.sensing, method=self.name)
         if task.world is None or task.goal is None:
-            raise InvalidArgumentError("replan needs sensing level 'oracle'")
+            raise InvalidArgumentError(
+                f"replan needs the task's world and goal (level 'oracle'); got a task at "
+                f"{task.sensing!r} without them"
+            )
         self.task = task
         self.world = task.world
         self.goal = np.asarray(task.goal, dtype=np.float64)
@@ -66,11 +77,11 @@ class Replan:
         self.age = 0
         r = self.task.agent_radius
         centers, radii = obstacles[:, :2], obstacles[:, 4]
-        for grow in (self.inflate, 0.0):
+        for grow, pad in ((self.inflate, _PAD), (0.0, _PAD), (0.0, 0.0)):
             try:
                 plan = shortest_path(
-                    self.world, p, self.goal, radius=r, centers=centers, radii=radii + grow,
-                    quad_segs=self.quad_segs,
+                    self.world, p, self.goal, radius=r + pad, centers=centers,
+                    radii=radii + grow, quad_segs=self.quad_segs,
                 )  # fmt: skip
             except CopiError:
                 continue

@@ -7,7 +7,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from copi.baselines._common import Steered, unit
+from copi.baselines._common import Steered, hit_points, unit
 from copi.errors import InvalidArgumentError
 from copi.online import Observation, Task
 
@@ -33,7 +33,10 @@ class VFH(Steered):
     from its borders and the target direction if it lies inside; the cheapest by
     5 |target - c| + 2 |previous - c| is taken, at a speed that falls with the
     histogram's value there. With every sector blocked the agent moves at half speed
-    along its longest ray.
+    along its longest ray. When the point aimed at is within range and the straight way
+    to it keeps ``radius + safety`` clear of every hit, the agent goes straight there:
+    the histogram counts hits beyond that point too (a wall behind the goal), which must
+    not keep the agent from a goal it can see.
 
     Parameters
     ----------
@@ -86,6 +89,9 @@ class VFH(Steered):
         u, _ = unit(desired)
         if not u.any():
             return np.zeros(2)
+        if reach < self.max_range and self._in_sight(ranges, u * reach):
+            self._previous = math.atan2(u[1], u[0])
+            return u * min(1.0, reach)
         h = self.histogram(ranges)
         blocked = np.where(
             h > self.threshold, True, np.where(h < 0.8 * self.threshold, False, self._blocked)
@@ -109,6 +115,16 @@ class VFH(Steered):
         if along > 0:
             speed = min(speed, along)
         return v * max(speed, 0.1)
+
+    def _in_sight(self, ranges: NDArray[np.float64], aim: NDArray[np.float64]) -> bool:
+        """Whether the segment to ``aim`` keeps ``radius + safety`` clear of every hit."""
+        pts = hit_points(ranges, self.cos, self.sin, self.max_range)
+        if not len(pts):
+            return True
+        L2 = float(aim @ aim)
+        t = np.clip(pts @ aim / L2, 0.0, 1.0) if L2 > 0 else np.zeros(len(pts))
+        d = np.hypot(*(pts - t[:, None] * aim[None]).T)
+        return bool(d.min() >= self.radius + self.safety)
 
     def _candidates(self, blocked: NDArray[np.bool_], target: float) -> NDArray[np.float64]:
         n = self.sectors

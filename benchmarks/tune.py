@@ -1,7 +1,7 @@
 """Tune every method's parameters on validation episodes (seed 1), disjoint from the
 reported ones (seed 0), with the same budget of four settings per method.
 
-    python benchmarks/tune.py --episodes 100 --families polygon,crowd --workers 2
+    python benchmarks/tune.py --episodes 40 --workers 2
 
 Prints, per method, success and median excess of each setting, and the chosen one (the
 highest success; within one point, the lower median excess). The chosen values are the
@@ -35,10 +35,10 @@ GRID: dict[str, list[dict[str, float]]] = {
         {"threshold": 0.4, "safety": 1.2},
     ],
     "dwa": [
-        {"margin": 0.3, "clearance_weight": 0.3},
         {"margin": 0.6, "clearance_weight": 0.3},
-        {"margin": 0.9, "clearance_weight": 0.5},
-        {"margin": 1.2, "clearance_weight": 0.5},
+        {"margin": 0.9, "clearance_weight": 0.3},
+        {"margin": 0.9, "clearance_weight": 1.0},
+        {"margin": 1.2, "clearance_weight": 1.0},
     ],
     "tangent-bug": [
         {"margin": 0.3, "follow": 1.2},
@@ -77,7 +77,7 @@ def _episode(args: tuple[str, int]) -> list[tuple[str, int, str, float]]:
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--episodes", type=int, default=100)
-    ap.add_argument("--families", default="polygon,crowd")
+    ap.add_argument("--families", default="star,polygon,indoor,maps,crowd")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--caps-dir", default="results/tuning")
     ap.add_argument("--out", default="docs/tuning.md")

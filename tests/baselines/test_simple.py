@@ -46,25 +46,16 @@ def test_compass_guard_never_steps_into_the_wall_with_ranges_only():
     assert sim.position[1] > 11  # it went up to the wall, not nowhere
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="bug in the shared guard kernel (src/copi/online/_kernels.py, _choose): the step "
-    "along the chosen compass direction is capped at (a . u) * reach, ~0 for a direction "
-    "perpendicular to the aim; at the wall's corner the agent pushes into the corner for "
-    "290 of 300 steps (stuck at (21.1, 13.7))",
-)
+# Found by this test: a quantised direction pressed into the wall's corner for 290 of 300
+# steps (the guard never counted walls); a guarded step now keeps its path off every hit.
 def test_compass_guard_gets_round_the_wall_on_the_route_at_map():
     sim = empty(WALL.start, WALL.goal, WALL)
     res = run("compass-guard", sim, "map", max_steps=100)
     assert res.outcome == "success"
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="bug in the shared guard kernel (src/copi/online/_kernels.py, _choose): with "
-    "the forward moves unsafe the best safe candidate is perpendicular to the goal, and "
-    "its step, capped at (a . u) * reach, is ~5e-16: the agent stands at (8, 10) for good",
-)
+# Found by this test: the guard kernel cut each step to its projection on the aim, ~0 for
+# a direction perpendicular to it, and the agent stood at (8, 10) for good.
 @pytest.mark.parametrize("level", ["sensor", "map"])
 def test_compass_guard_passes_a_standing_disc_of_radius_075(level):
     res = run("compass-guard", head_on(10.0, 10.0, radius=0.75, speed=0.0), level, max_steps=60)

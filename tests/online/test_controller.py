@@ -27,9 +27,9 @@ def _by_hand(caps, s, want, reach=math.inf):
         return node, landmark, template, g, None, np.zeros(2)
     u = np.asarray(want, float) / np.linalg.norm(want)
     d = int(np.argmax(np.where(ok, cand @ u, -np.inf)))
-    step = 1.0
-    if math.isfinite(reach) and cand[d] @ u * reach > 0:
-        step = min(1.0, cand[d] @ u * reach)
+    step = 1.0  # a full step, unless the aim is nearer than that: then come level with
+    if reach < 1.0:  # it, and go at least half way (a sideways step must not vanish)
+        step = max(cand[d] @ u * reach, 0.5 * reach)
     return node, landmark, template, g, d, cand[d] * step
 
 

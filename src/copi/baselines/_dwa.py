@@ -8,7 +8,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from copi.baselines._common import Steered, hit_points, unit
+from copi.baselines._common import Steered, unit
 from copi.errors import InvalidArgumentError
 from copi.online import Observation, Task
 
@@ -18,13 +18,16 @@ __all__ = ["DWA"]
 class DWA(Steered):
     """Sample velocities (``headings`` directions plus the desired one, times four speeds,
     plus standing still); predict each as a straight motion over ``horizon`` steps; keep
-    those whose swept disc stays ``margin`` clear of every hit point of the reading; take
+    those whose disc stays ``margin`` clear of every hit point of the reading from the end
+    of this step to the end of the horizon (and whose step does not run into a hit); take
     the best by progress towards the aim point + ``clearance_weight`` × clearance (capped
     at 3) / 3 + 0.1 × speed. With none admissible, the one with most clearance.
 
-    Level ``sensor`` (every hit is an obstacle); hand-written; ``margin`` and
-    ``clearance_weight`` are tuned. The agent's speed changes freely within a step, so the
-    dynamic window is the whole disc of speeds up to 1.
+    Level ``sensor``: every hit is an obstacle. At ``map`` the static reading tells the
+    walls apart (as it does for copi's guard): a motion need only not run into a wall,
+    and the margin and the clearance score count moving obstacles only. Hand-written;
+    ``margin`` and ``clearance_weight`` are tuned. The agent's speed changes freely
+    within a step, so the dynamic window is the whole disc of speeds up to 1.
 
     Parameters
     ----------
@@ -69,31 +72,57 @@ class DWA(Steered):
         u, _ = unit(desired)
         if not u.any():
             return np.zeros(2)
-        aim = u * (reach if math.isfinite(reach) else self.max_range)
+        # At least a step ahead: a route's corner can lie a hair away, where every motion
+        # overshoots and standing still scored best for good (the goal itself ends the
+        # episode within its tolerance, so aiming past it is harmless).
+        aim = u * (max(reach, 1.0) if math.isfinite(reach) else self.max_range)
         dirs = np.vstack([self._dirs, u])
         vel = (dirs[:, None, :] * self._speeds[None, :, None]).reshape(-1, 2)
         vel = np.vstack([vel, np.zeros((1, 2))])
-        pts = hit_points(np.asarray(obs.ranges, dtype=np.float64), self.cos, self.sin,
-                         self.max_range)  # fmt: skip
-        if len(pts):
-            # Distance from each hit point to each predicted segment 0 -> horizon * v.
-            seg = vel * self.horizon
-            L2 = (seg * seg).sum(1)
-            t = (pts @ seg.T) / np.where(L2 > 0, L2, 1.0)[None, :]
-            t = np.clip(t, 0.0, 1.0)
-            near = t[..., None] * seg[None, :, :]
-            d = np.sqrt(((pts[:, None, :] - near) ** 2).sum(-1)).min(0)
-            clear = d - self.radius
+        ranges = np.asarray(obs.ranges, dtype=np.float64)
+        hit = ranges < self.max_range
+        if obs.static is not None:
+            # At level map the static reading tells walls (which only stop the agent)
+            # from moving obstacles, as it does for copi's guard.
+            moving = hit & (ranges < np.asarray(obs.static) - 0.05)
         else:
-            clear = np.full(len(vel), np.inf)
+            moving = hit
+        wall = hit & ~moving
+        # Where the agent will be once the obstacles have moved: from the end of this
+        # step to the end of the horizon (measured from the current position, every
+        # motion would score the same as soon as a disc came within the margin).
+        clear = self._clearance(ranges, moving, vel, vel * self.horizon)
+        # Walls only stop the agent: a step may not take it nearer to one than 0.02, or
+        # than it already is (resting against a wall, it may slide along it).
+        touch = self._clearance(ranges, wall, 0.25 * vel, vel)
+        now = self._clearance(ranges, wall, np.zeros((1, 2)), np.zeros((1, 2)))[0]
+        floor = min(0.02, now - 1e-9)
         progress = np.hypot(*aim) - np.hypot(*(aim[None, :] - vel).T)
         speed = np.hypot(*vel.T)
         score = progress + self.clearance_weight * np.minimum(clear, 3.0) / 3.0 + 0.1 * speed
-        ok = clear >= self.margin
+        ok = (clear >= self.margin) & (touch >= floor)
         if ok.any():
             score = np.where(ok, score, -np.inf)
             best = int(np.argmax(score))
         else:
-            best = int(np.argmax(clear))
-        v = vel[best]
-        return v
+            best = int(np.argmax(np.minimum(clear, touch + 1.0)))
+        return vel[best]
+
+    def _clearance(
+        self,
+        ranges: NDArray[np.float64],
+        which: NDArray[np.bool_],
+        a: NDArray[np.float64],
+        b: NDArray[np.float64],
+    ) -> NDArray[np.float64]:
+        """Least distance from the agent's disc to the chosen hit points along each
+        straight motion a -> b (rows), shape (k,) (inf with no such hit)."""
+        pts = np.column_stack([ranges[which] * self.cos[which], ranges[which] * self.sin[which]])
+        if not len(pts):
+            return np.full(len(a), np.inf)
+        seg = b - a
+        L2 = (seg * seg).sum(1)
+        rel = pts[:, None, :] - a[None, :, :]
+        t = np.clip((rel * seg[None]).sum(-1) / np.where(L2 > 0, L2, 1.0)[None, :], 0.0, 1.0)
+        near = a[None, :, :] + t[..., None] * seg[None, :, :]
+        return np.sqrt(((pts[:, None, :] - near) ** 2).sum(-1)).min(0) - self.radius

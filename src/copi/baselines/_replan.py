@@ -10,10 +10,13 @@ from numpy.typing import NDArray
 
 from copi.baselines._common import unit
 from copi.errors import CopiError, InvalidArgumentError
+from copi.geometry import move_discs
 from copi.online import Observation, Task, check_sensing
 from copi.planning import shortest_path
 
 __all__ = ["Replan"]
+
+
 
 _PAD = 0.01
 """Added to the agent's radius when planning: the planner's circles are circumscribed
@@ -27,11 +30,12 @@ class Replan:
     of the path (``lookahead`` steps) meets an inflated obstacle. Level ``oracle`` (it
     sees every obstacle's position, wherever it is); hand-written; ``inflate`` is tuned.
 
-    When the agent stands inside an inflated obstacle, or the goal does, the plan is made
-    with the obstacles at their true size; failing that, the agent steps away from the
-    nearest obstacle. Plans are made for the agent's disc grown by a hundredth of a step
-    (a path must not graze a wall's corner, which would stop the agent there), or at its
-    true size when it rests closer than that to a wall.
+    A disc is inflated less when the agent or the goal is nearer to it than ``inflate``
+    (just enough to leave them free); failing a plan, the obstacles are taken at their
+    true size; failing that, the agent steps away from the nearest obstacle. Plans are
+    made for the agent's disc grown by a hundredth of a step (a path must not graze a
+    wall's corner, which would stop the agent there), or at its true size when it rests
+    closer than that to a wall.
 
     Parameters
     ----------
@@ -77,7 +81,13 @@ class Replan:
         self.age = 0
         r = self.task.agent_radius
         centers, radii = obstacles[:, :2], obstacles[:, 4]
-        for grow, pad in ((self.inflate, _PAD), (0.0, _PAD), (0.0, 0.0)):
+        # Each disc is inflated by `inflate`, but never so much that it swallows the agent
+        # or the goal (dropping the inflation then planned a path that skims the disc).
+        room = np.minimum(
+            np.hypot(*(centers - p).T), np.hypot(*(centers - self.goal).T)
+        ) - radii - r - _PAD - 0.01
+        inflated = np.clip(room, 0.0, self.inflate)
+        for grow, pad in ((inflated, _PAD), (0.0, _PAD), (0.0, 0.0)):
             try:
                 plan = shortest_path(
                     self.world, p, self.goal, radius=r + pad, centers=centers,
@@ -129,11 +139,29 @@ class Replan:
             k = int(np.argmin(np.hypot(*d.T) - obs.obstacles[:, 4]))
             away, _ = unit(d[k])
             return away
-        while len(self.path) > 1 and math.dist(p, self.path[0]) < 1e-6:
-            self.path = self.path[1:]
-        u, dist = unit(self.path[0] - p)
-        step = min(1.0, dist)
-        if step < 1.0 and len(self.path) > 1:
-            # Take the corner: the rest of the step goes along the next piece.
-            self.path = self.path[1:]
-        return u * step
+        # One step along the path (past vertices nearer than a step: a path round a
+        # disc's polygon has vertices a hair apart, and stopping at each one crawled
+        # while the disc came on), unless that chord would run into a wall (it can clip
+        # a corner the path turns round): then to the next vertex.
+        left = 1.0
+        here = p
+        target = self.path[-1]
+        passed = len(self.path) - 1
+        for i, q in enumerate(self.path):
+            seg = math.dist(here, q)
+            if seg >= left:
+                u, _ = unit(q - here)
+                target = here + u * left
+                passed = i
+                break
+            left -= seg
+            here = q
+        _, blocked = move_discs(p, target - p, self.world.segments, self.task.agent_radius)
+        if bool(np.asarray(blocked).any()) and passed > 0:
+            u, dist = unit(self.path[0] - p)
+            target = p + u * min(1.0, dist)
+            passed = 0 if dist > 1.0 else min(1, len(self.path) - 1)
+        self.path = self.path[passed:]  # the vertices before the target are behind
+        v = target - p
+        n = math.hypot(v[0], v[1])
+        return v / n if n > 1.0 else v

@@ -88,6 +88,23 @@ def _room(s, static, cos, sin, max_range, ax, ay, step):  # type: ignore[no-unty
     return end, sweep, sweep_all
 
 
+_WALL = 0.31
+"""Least distance a guarded step's path keeps from any hit: the agent's radius (0.3) and
+a hair."""
+
+
+@njit(cache=True, inline="always")
+def _step_length(along, reach):  # type: ignore[no-untyped-def]
+    """Length of a unit-direction step whose projection on the aim is ``along``, the aim
+    lying ``reach`` ahead: a full step unless the aim is nearer than one step; then as
+    far as coming level with it, and at least half the way (a sideways step must not
+    shrink to nothing: with the step cut to the projection, a direction perpendicular to
+    the aim moved the agent by ~1e-16 and a guarded agent stalled for good)."""
+    if not math.isfinite(reach) or reach >= 1.0:
+        return 1.0
+    return max(along, 0.5 * reach)
+
+
 @njit(cache=True, inline="always", fastmath=FAST)
 def _choose(  # type: ignore[no-untyped-def]
     s, static, node, d2, cand, ok, wx, wy, reach, guard, cos, sin, max_range, out
@@ -127,13 +144,12 @@ def _choose(  # type: ignore[no-untyped-def]
         ay = cand[node, d, 1]
         score = ax * ux + ay * uy
         if guard > 0.0:
-            step = 1.0
-            if math.isfinite(reach):
-                along = score * reach
-                if along > 0.0:
-                    step = min(1.0, along)
-            end, sweep, _ = _room(s, static, cos, sin, max_range, ax, ay, step)
-            if end < guard or sweep < 0.5 * guard:
+            step = _step_length(score * reach, reach)
+            end, sweep, sweep_all = _room(s, static, cos, sin, max_range, ax, ay, step)
+            # A step whose path runs within _WALL of any hit (a wall included) would be
+            # stopped there: without this, a quantised direction pressed into a wall
+            # corner for good where the route hugs it.
+            if end < guard or sweep < 0.5 * guard or sweep_all < _WALL:
                 if end > fallback_clear:
                     fallback_clear = end
                     fallback = d
@@ -167,11 +183,7 @@ def _choose(  # type: ignore[no-untyped-def]
         return
     ax = cand[node, best, 0]
     ay = cand[node, best, 1]
-    step = 1.0
-    if math.isfinite(reach):
-        along = (ax * ux + ay * uy) * reach
-        if along > 0.0:
-            step = min(1.0, along)
+    step = _step_length((ax * ux + ay * uy) * reach, reach)
     out[0] = ax * step
     out[1] = ay * step
     out[4] = best

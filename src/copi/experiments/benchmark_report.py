@@ -86,6 +86,10 @@ def _summary(rows: list[dict[str, Any]]) -> dict[str, Any]:
     dec = np.array([r["decision_us"] for r in rows], dtype=float)
     ttg = np.array([r["time_to_goal"] for r in rows if r["outcome"] == "success"], dtype=float)
     clear = np.array([r["min_clearance"] for r in rows if r["min_clearance"] is not None])
+    turn = np.array(
+        [r["smoothness"] / max(r["steps"], 1) for r in rows if r["outcome"] == "success"],
+        dtype=float,
+    )
     return {
         "n": n,
         "success": float((out == "success").mean()),
@@ -95,6 +99,7 @@ def _summary(rows: list[dict[str, Any]]) -> dict[str, Any]:
         "excess_p90": float(np.percentile(ex, 90)) if len(ex) else math.nan,
         "time_to_goal": float(np.median(ttg)) if len(ttg) else math.nan,
         "clearance": float(np.median(clear)) if len(clear) else math.nan,
+        "turning": float(np.degrees(np.median(turn))) if len(turn) else math.nan,
         "decisions_per_s": 1e6 / float(np.median(dec)) if len(dec) else math.nan,
         "no_optimum": int(sum(r["optimal_length"] is None for r in rows)),
     }
@@ -212,7 +217,10 @@ def write_benchmark_report(
         f"Δ columns: the method minus {REFERENCE} at the same level (oracle rows: minus its "
         "`map` row) on the same episodes, in points, with 95 % bootstrap intervals; Δ excess "
         "over the episodes both succeeded in. **copi loses** marks a row whose success is "
-        f"higher than {REFERENCE}'s with an interval excluding zero.",
+        f"higher than {REFERENCE}'s with an interval excluding zero. Steps to goal, "
+        "clearance (the least surface distance to a moving obstacle over an episode, "
+        "negative after a contact) and turning per step (the sum of turning angles between "
+        "moves over the steps) are medians; steps and turning over successful episodes.",
         "",
     ]
     for family in families:
@@ -230,8 +238,9 @@ def write_benchmark_report(
                 if no_opt else []
             ),  # fmt: skip
             "| method | sensing | success | collision | timeout | median excess | p90 excess "
-            "| median steps to goal | decisions / s | Δ success | Δ median excess | |",
-            "|---|---|---|---|---|---|---|---|---|---|---|---|",
+            "| steps to goal | clearance | turning / step | decisions / s | Δ success "
+            "| Δ median excess | |",
+            "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
         ]
         for method, level in keys:
             s = table[family][(method, level)]
@@ -246,7 +255,8 @@ def write_benchmark_report(
             lines.append(
                 f"| {method} | {level} | {_pct(s['success'])} | {_pct(s['collision'])} | "
                 f"{_pct(s['timeout'])} | {_pct(s['excess_median'])} | {_pct(s['excess_p90'])} | "
-                f"{s['time_to_goal']:.0f} | {s['decisions_per_s']:,.0f} | {_diff(d_s)} | "
+                f"{s['time_to_goal']:.0f} | {s['clearance']:.2f} | {s['turning']:.0f}° | "
+                f"{s['decisions_per_s']:,.0f} | {_diff(d_s)} | "
                 f"{_diff(d_e)} | {flag} |"
             )
         lines.append("")

@@ -1,0 +1,340 @@
+"""``copi evaluate``, ``benchmark``, ``pursuit``, ``report``, ``reproduce``: experiments."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from copi.cli._common import _with_progress, app, console, out, progress
+from copi.errors import CopiError
+
+
+@app.command("evaluate")
+def evaluate_command(
+    capabilities: Annotated[
+        Path | None,
+        typer.Argument(help="Capabilities file (.npz); needed by copi's methods only."),
+    ] = None,
+    output: Annotated[
+        Path | None, typer.Option("-o", "--output", help="Results file (SQLite).")
+    ] = None,
+    method: Annotated[
+        str, typer.Option("--method", help="copi-faithful, copi-extended or a baseline.")
+    ] = "copi-faithful",
+    worlds: Annotated[int, typer.Option("--worlds", min=1, help="Episodes (paper: 1549).")] = 1549,
+    family: Annotated[str, typer.Option("--family", help="World family.")] = "star",
+    sensing: Annotated[
+        str, typer.Option("--sensing", help="sensor, map or oracle.")
+    ] = "map",
+    world_file: Annotated[
+        Path | None, typer.Option("--world-file", help="Run these worlds instead of a family.")
+    ] = None,
+    seed: Annotated[int, typer.Option("--seed", min=0, help="Seed of the episodes.")] = 0,
+    workers: Annotated[int, typer.Option("--workers", min=1, help="Local processes.")] = 1,
+    scheduler: Annotated[
+        str | None, typer.Option("--scheduler", help="Dask scheduler tcp://HOST:PORT instead.")
+    ] = None,
+    max_steps: Annotated[int, typer.Option("--max-steps", min=1, help="Step limit.")] = 1000,
+    guard: Annotated[
+        float | None,
+        typer.Option("--guard", min=0.0, help="Guard of copi's methods (default: the method's)."),
+    ] = None,
+    continual: Annotated[
+        bool, typer.Option("--continual", help="Learn unfamiliar contexts online.")
+    ] = False,
+    contact_continues: Annotated[
+        bool,
+        typer.Option(
+            "--contact-continues", help="A contact does not end the episode (older behaviour)."
+        ),
+    ] = False,
+) -> None:
+    """Experiment 1 (paper §IV): reach goals in dynamic worlds never seen; each episode's
+    path is compared with the optimum on the stationary snapshot. Rerunning the same
+    command resumes an interrupted run."""
+    from copi.experiments.navigation import NavigationConfig, evaluate
+    from copi.experiments.report import summarize
+    from copi.experiments.store import ResultsStore
+
+    if output is None:
+        raise CopiError("evaluate needs -o/--output: the results file to write")
+    if world_file is not None:
+        from copi.world import load_worlds
+
+        load_worlds(world_file)  # a bad file is refused before anything is written
+    config = NavigationConfig(
+        capabilities=str(capabilities) if capabilities is not None else None,
+        method=method,
+        worlds=worlds,
+        family=family,
+        sensing=sensing,
+        world_file=str(world_file) if world_file is not None else None,
+        seed=seed,
+        max_steps=max_steps,
+        guard=guard,
+        continual=continual,
+        end_on_contact=not contact_continues,
+    )
+    output.parent.mkdir(parents=True, exist_ok=True)
+    run_id = _with_progress(
+        f"{method}: episodes",
+        worlds,
+        lambda report: evaluate(
+            config, output, workers=workers, scheduler=scheduler, progress=report
+        ),
+    )
+    with ResultsStore(output) as store:
+        s = summarize(store.episodes(run_id))
+    out.print(
+        f"{output}: {method} ({sensing}): {s['episodes']} episodes, success "
+        f"{100 * s['success']:.1f} %, collision {100 * s['contact']:.1f} %, timeout "
+        f"{100 * s['timeout']:.1f} %, median excess {100 * s['excess_median']:.1f} %, "
+        f"{s['decisions_per_s']:,.0f} decisions/s"
+    )
+
+
+@app.command("benchmark")
+def benchmark_command(
+    output: Annotated[Path, typer.Option("-o", "--output", help="Directory for everything.")],
+    quick: Annotated[
+        bool, typer.Option("--quick", help="30 episodes per family (a few minutes).")
+    ] = False,
+    families: Annotated[
+        str | None, typer.Option("--families", help="Comma-separated families (default: all).")
+    ] = None,
+    methods: Annotated[
+        str | None,
+        typer.Option("--methods", help="Comma-separated methods, name or name@level."),
+    ] = None,
+    episodes: Annotated[
+        int | None, typer.Option("--episodes", min=1, help="Episodes per family (1000).")
+    ] = None,
+    seed: Annotated[int, typer.Option("--seed", min=0, help="Seed of the episodes.")] = 0,
+    workers: Annotated[int, typer.Option("--workers", min=1, help="Local processes.")] = 2,
+    scheduler: Annotated[
+        str | None, typer.Option("--scheduler", help="Dask scheduler tcp://HOST:PORT instead.")
+    ] = None,
+) -> None:
+    """Every method at its sensing levels on the same episodes of every world family, into
+    DIR/benchmark.sqlite (resumable), with DIR/benchmark.md: a table per family, paired
+    differences against copi with 95 % bootstrap intervals, and a figure."""
+    from copi.baselines import navground_available
+    from copi.experiments.benchmark import (
+        BENCHMARK_FAMILIES,
+        BenchmarkConfig,
+        ensure_capabilities,
+        run_benchmark,
+    )
+    from copi.experiments.benchmark_report import write_benchmark_report
+    from copi.experiments.methods import method_spec, parse_methods
+    from copi.world import check_family
+
+    fams = BENCHMARK_FAMILIES if families is None else tuple(
+        f.strip() for f in families.split(",") if f.strip()
+    )
+    for f in fams:
+        check_family(f)
+    chosen = parse_methods(methods)
+    if methods is None and not navground_available():
+        console.print(
+            "copi: navground is not installed: its peers are left out "
+            "(pip install 'copi[peers]' to include them)",
+            highlight=False,
+        )
+        chosen = [m for m in chosen if method_spec(m[0]).available]
+    for m, _ in chosen:
+        if not method_spec(m).available:
+            raise CopiError(
+                f"{m} needs navground, which is not installed: pip install 'copi[peers]'"
+            )
+    n = episodes if episodes is not None else (30 if quick else 1000)
+    if "maps" in fams:
+        from copi.world import movingai_dir
+
+        movingai_dir()  # refuse a missing data directory before anything is written
+    output.mkdir(parents=True, exist_ok=True)
+    presets = {p for m, _ in chosen if (p := method_spec(m).capabilities) is not None}
+    with progress() as bar:
+        task = bar.add_task("learn capabilities", total=len(presets))
+        caps = ensure_capabilities(output, presets, seed=seed)
+        bar.update(task, completed=len(presets))
+    config = BenchmarkConfig(
+        methods=tuple(chosen), families=tuple(fams), episodes=n, seed=seed, capabilities=caps
+    )
+    results = output / "benchmark.sqlite"
+    total = n * len(fams) * len(chosen)
+    _with_progress(
+        "benchmark: episodes",
+        total,
+        lambda report: run_benchmark(
+            config, results, workers=workers, scheduler=scheduler, progress=report
+        ),
+    )
+    report = write_benchmark_report(results, output)
+    out.print(report.read_text(encoding="utf-8").split("![")[0])
+    out.print(str(report))
+
+
+@app.command("pursuit")
+def pursuit_command(
+    capabilities: Annotated[Path, typer.Argument(help="Capabilities file (.npz).")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="Results file (SQLite).")],
+    games: Annotated[int, typer.Option("--games", min=1, help="Games to play.")] = 100,
+    dynamic: Annotated[
+        bool, typer.Option("--dynamic/--static", help="With or without moving obstacles.")
+    ] = True,
+    evader: Annotated[
+        str, typer.Option("--evader", help="capability (through the capabilities) or game.")
+    ] = "capability",
+    seed: Annotated[int, typer.Option("--seed", min=0, help="Seed of the games.")] = 0,
+    horizon: Annotated[int, typer.Option("--horizon", min=1, help="Steps to survive.")] = 300,
+    workers: Annotated[int, typer.Option("--workers", min=1, help="Local processes.")] = 1,
+    scheduler: Annotated[
+        str | None, typer.Option("--scheduler", help="Dask scheduler tcp://HOST:PORT instead.")
+    ] = None,
+    guard: Annotated[
+        float, typer.Option("--guard", min=0.0, help="The capability evader's guard.")
+    ] = 1.2,
+    contact_continues: Annotated[
+        bool,
+        typer.Option("--contact-continues", help="A contact does not end the game (older rule)."),
+    ] = False,
+) -> None:
+    """Experiment 2 (paper §IV, Fig. 5): the homicidal chauffeur. A faster car with a
+    turn radius chases the agent; the agent plays the game's strategy through its
+    capabilities (or, with --evader game, directly). Resumable, like evaluate."""
+    from copi.experiments.pursuit import PursuitConfig, pursue
+    from copi.experiments.report import summarize_games
+    from copi.experiments.store import ResultsStore
+
+    config = PursuitConfig(
+        capabilities=str(capabilities), evader=evader, dynamic=dynamic, games=games,
+        seed=seed, horizon=horizon, guard=guard, contact_ends=not contact_continues,
+    )  # fmt: skip
+    output.parent.mkdir(parents=True, exist_ok=True)
+    run_id = _with_progress(
+        f"{config.method}: games",
+        games,
+        lambda report: pursue(
+            config, output, workers=workers, scheduler=scheduler, progress=report
+        ),
+    )
+    with ResultsStore(output) as store:
+        s = summarize_games(store.games(run_id))
+    out.print(
+        f"{output}: {config.method}: {s['games']} games, capture {100 * s['capture']:.1f} %, "
+        f"collision {100 * s['collision']:.1f} %, "
+        f"mean survival {s['survival_mean']:.1f} steps, games with contact "
+        f"{100 * s['contact_games']:.1f} %"
+    )
+
+
+@app.command("report")
+def report_command(
+    results: Annotated[list[Path], typer.Argument(help="Results files (SQLite).")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="Directory for the report.")],
+) -> None:
+    """Write report.md with the summary table and the paper's Fig. 3 and Fig. 4."""
+    from copi.errors import InvalidArgumentError
+    from copi.experiments.report import write_report
+
+    for r in results:
+        if not r.exists():
+            raise InvalidArgumentError(f"{r}: no such results file")
+    path = write_report([str(r) for r in results], output)
+    out.print(str(path))
+
+
+@app.command("reproduce")
+def reproduce_command(
+    output: Annotated[Path, typer.Option("-o", "--output", help="Directory for everything.")],
+    quick: Annotated[
+        bool, typer.Option("--quick", help="A small run (100 episodes) to try things out.")
+    ] = False,
+    workers: Annotated[int, typer.Option("--workers", min=1, help="Local processes.")] = 2,
+    seed: Annotated[int, typer.Option("--seed", min=0, help="Seed of learning and episodes.")] = 0,
+) -> None:
+    """The paper's experiments end to end: learn capabilities (100 worlds x 300 steps),
+    Experiment 1 on 1549 dynamic worlds in the faithful mode (4 directions, the paper's
+    chain) and the extended mode (16 directions, candidates checked against the live
+    reading with a guard of 1.2: the agent radius, an obstacle's step and a margin),
+    Experiment 2 (200
+    homicidal-chauffeur games, stationary and dynamic, capability and game evaders), and
+    the report."""
+    from copi.experiments.navigation import NavigationConfig, evaluate
+    from copi.experiments.pursuit import PursuitConfig, pursue
+    from copi.experiments.report import write_report
+    from copi.learning import LearnParams, learn
+
+    output.mkdir(parents=True, exist_ok=True)
+    episodes = 100 if quick else 1549
+    results = output / "experiment1.sqlite"
+    modes = [("faithful", 4, 0.0), ("extended", 16, 1.2)]
+    with progress() as bar:
+        for name, directions, guard in modes:
+            caps_path = output / f"capabilities-{name}.npz"
+            if not caps_path.exists():
+                bar_task = bar.add_task(f"learn ({name})", total=1)
+                learn(LearnParams(seed=seed, directions=directions)).save(caps_path)
+                bar.update(bar_task, completed=1)
+            eval_task = bar.add_task(f"evaluate ({name})", total=episodes)
+
+            def advance(done: int, total: int, task: Any = eval_task) -> None:
+                bar.update(task, completed=done)
+
+            config = NavigationConfig(
+                capabilities=str(caps_path), method=f"copi-{name}", worlds=episodes, seed=seed,
+                guard=guard,
+            )
+            evaluate(config, results, workers=workers, progress=advance)
+        caps_path = output / "capabilities-extended.npz"
+        for kind in ("capability", "game"):
+            for dynamic in (False, True):
+                game_cfg = PursuitConfig(
+                    capabilities=str(caps_path), evader=kind, dynamic=dynamic,
+                    games=20 if quick else 200, seed=seed,
+                )  # fmt: skip
+                game_task = bar.add_task(f"pursuit ({game_cfg.method})", total=game_cfg.games)
+
+                def advance_games(done: int, total: int, task: Any = game_task) -> None:
+                    bar.update(task, completed=done)
+
+                pursue(game_cfg, results, workers=workers, progress=advance_games)
+        # The benchmark's quick version: every method on the same episodes of every family.
+        from copi.baselines import navground_available
+        from copi.experiments.benchmark import (
+            BENCHMARK_FAMILIES,
+            BenchmarkConfig,
+            ensure_capabilities,
+            run_benchmark,
+        )
+        from copi.experiments.benchmark_report import write_benchmark_report
+        from copi.experiments.methods import method_spec, parse_methods
+
+        chosen = [m for m in parse_methods(None) if method_spec(m[0]).available]
+        if not navground_available():
+            console.print("copi: navground is not installed: its peers are left out of the "
+                          "benchmark (pip install 'copi[peers]')", highlight=False)  # fmt: skip
+        bench = BenchmarkConfig(
+            methods=tuple(chosen), families=BENCHMARK_FAMILIES, episodes=10 if quick else 30,
+            seed=seed, capabilities=ensure_capabilities(output, {"faithful", "extended"},
+                                                        seed=seed),
+        )  # fmt: skip
+        bench_task = bar.add_task(
+            "benchmark (quick)", total=bench.episodes * len(chosen) * len(BENCHMARK_FAMILIES)
+        )
+
+        def advance_bench(done: int, total: int, task: Any = bench_task) -> None:
+            bar.update(task, completed=done)
+
+        run_benchmark(bench, output / "benchmark.sqlite", workers=workers, progress=advance_bench)
+    write_benchmark_report(output / "benchmark.sqlite", output)
+    report = write_report([str(results)], output)
+    text = report.read_text(encoding="utf-8")
+    out.print(text.split("Runs:")[0])
+    if "# Experiment 2" in text:
+        out.print("# Experiment 2" + text.split("# Experiment 2")[1].split("![")[0])
+    out.print(str(report))
+    out.print(str(output / "benchmark.md"))

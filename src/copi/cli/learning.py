@@ -1,0 +1,152 @@
+"""``copi learn``, ``copi inspect``, ``copi figures``: capabilities (paper §II)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+from rich.table import Table
+
+from copi.cli._common import app, out, progress
+
+
+@app.command("learn")
+def learn_command(
+    output: Annotated[
+        Path, typer.Option("-o", "--output", help="Capabilities file to write (.npz).")
+    ],
+    worlds: Annotated[int, typer.Option("--worlds", min=1, help="Random worlds explored.")] = 100,
+    steps: Annotated[
+        int, typer.Option("--steps", min=1, help="Random-walk steps per world.")
+    ] = 300,
+    seed: Annotated[int, typer.Option("--seed", min=0, help="Seed of exploration and map.")] = 0,
+    max_nodes: Annotated[
+        int | None, typer.Option("--max-nodes", min=2, help="Cap on the context map's nodes.")
+    ] = None,
+    epochs: Annotated[
+        int, typer.Option("--epochs", min=1, help="GNG passes over the readings.")
+    ] = 2,
+    landmarks: Annotated[
+        int | None, typer.Option("--landmarks", min=1, help="Force this many landmarks (paper: 9).")
+    ] = None,
+    directions: Annotated[
+        int, typer.Option("--directions", help="Policies per template: 4, 8 or 16.")
+    ] = 4,
+    learner: Annotated[
+        str, typer.Option("--learner", help="astar (the paper's) or value-iteration.")
+    ] = "astar",
+    workers: Annotated[int, typer.Option("--workers", min=1, help="Exploring processes.")] = 1,
+) -> None:
+    """Learn capabilities offline, without any task (paper §II): explore, grow the
+    context map, skeletonise it into landmarks, reduce them by symmetry, learn local
+    policies."""
+    from copi.learning import LearnParams, learn
+
+    params = LearnParams(
+        worlds=worlds,
+        steps=steps,
+        seed=seed,
+        workers=workers,
+        max_nodes=max_nodes,
+        epochs=epochs,
+        landmarks=landmarks,
+        directions=directions,
+        learner=learner,
+    )
+    output.parent.mkdir(parents=True, exist_ok=True)
+    with progress() as bar:
+        tasks: dict[str, object] = {}
+
+        def report(stage: str, done: int, total: int) -> None:
+            if stage not in tasks:
+                tasks[stage] = bar.add_task(stage, total=total)
+            bar.update(tasks[stage], completed=done)  # type: ignore[arg-type]
+
+        caps = learn(params, progress=report)
+    caps.save(output)
+    _print_stages(caps.stats["stages"])
+    out.print(f"{output}: {_summary_line(caps.summary())}")
+
+
+def _summary_line(s: dict[str, object]) -> str:
+    return (
+        f"{s['nodes']} nodes -> {s['landmarks']} landmarks -> {s['reduced_landmarks']} reduced "
+        f"landmarks -> {s['policies']} policies ({s['directions']} directions, {s['learner']})"
+    )
+
+
+def _print_stages(stages: list[dict[str, object]]) -> None:
+    table = Table("stage", "result", "seconds", title="capability learning")
+    for st in stages:
+        result = ", ".join(
+            f"{k.replace('_', ' ')} {v:.4g}"
+            if isinstance(v, float)
+            else f"{k.replace('_', ' ')} {v}"
+            for k, v in st.items()
+            if k not in ("stage", "seconds")
+        )
+        table.add_row(str(st["stage"]), result, f"{float(st['seconds']):.2f}")  # type: ignore[arg-type]
+    out.print(table)
+
+
+@app.command("inspect")
+def inspect_command(
+    capabilities: Annotated[Path, typer.Argument(help="Capabilities file (.npz).")],
+    as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of tables.")] = False,
+) -> None:
+    """Describe a capabilities file: what each stage produced, and how it was learnt."""
+    import json
+
+    from copi.learning import Capabilities
+
+    caps = Capabilities.load(capabilities)
+    templates: list[dict[str, Any]] = [
+        {
+            "template": t,
+            "landmark": int(caps.reduction.templates[t]),
+            "landmarks": int((caps.reduction.template_of == t).sum()),
+            "policies": [
+                caps.policies.names[d]
+                for d in range(len(caps.policies.names))
+                if caps.policies.passable[t, d]
+            ],
+        }
+        for t in range(len(caps.reduction.templates))
+    ]
+    info = {
+        "file": str(capabilities),
+        "summary": caps.summary(),
+        "operators": [o.name for o in caps.group.operators],
+        "group_words": caps.group.words,
+        "templates": templates,
+        "params": caps.params,
+        "stats": caps.stats,
+    }
+    if as_json:
+        print(json.dumps(info, indent=1))
+        return
+    out.print(f"{capabilities}: {_summary_line(caps.summary())}")
+    _print_stages(caps.stats.get("stages", []))
+    table = Table("template", "from landmark", "landmarks", "policies", title="templates")
+    for t in templates:
+        table.add_row(
+            str(t["template"]), str(t["landmark"]), str(t["landmarks"]), " ".join(t["policies"])
+        )
+    out.print(table)
+    out.print("parameters: " + ", ".join(f"{k}={v}" for k, v in caps.params.items()))
+
+
+@app.command("figures")
+def figures_command(
+    capabilities: Annotated[Path, typer.Argument(help="Capabilities file (.npz).")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="Directory for the figures.")],
+) -> None:
+    """Draw the paper's Fig. 1 panels (context map, H(k), landmarks and templates,
+    policies) and Fig. 2 (the permutation automaton of the toy domain)."""
+    from copi.experiments.capability_figures import save_capability_figures
+    from copi.learning import Capabilities
+
+    caps = Capabilities.load(capabilities)
+    for path in save_capability_figures(caps, output):
+        out.print(str(path))

@@ -145,18 +145,21 @@ def _figure_success_excess(
     families = list(table)
     cols = min(3, len(families))
     rows_n = math.ceil(len(families) / cols)
-    fig = _figure(4.2 * cols, 3.6 * rows_n + 1.2)
+    fig = _figure(4.2 * cols, 3.6 * rows_n + (0 if len(families) % cols else 1.2))
     axes = np.atleast_1d(fig.subplots(rows_n, cols, squeeze=False)).ravel()
     markers = {"sensor": "o", "map": "s", "oracle": "^"}
     names = list(METHODS)
     import matplotlib
 
-    colours = matplotlib.colormaps["tab20"]
+    # One distinct colour per method (tab10, then tab20's odd entries), shape per level.
+    palette = list(matplotlib.colormaps["tab10"].colors) + list(
+        matplotlib.colormaps["tab20"].colors[1::2]
+    )
     for ax, family in zip(axes, families, strict=False):
         for (method, level), s in table[family].items():
             if not math.isfinite(s["excess_median"]):
                 continue
-            c = colours(names.index(method) % 20)
+            c = palette[names.index(method) % len(palette)]
             ax.scatter(100 * s["excess_median"], 100 * s["success"], marker=markers[level],
                        color=c, s=36, edgecolor="black" if method.startswith("copi") else "none",
                        label=f"{method} ({level})", zorder=3)  # fmt: skip
@@ -170,9 +173,14 @@ def _figure_success_excess(
     for ax in axes[: len(families)]:
         for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
             seen.setdefault(lab, h)
-    if seen:
+    spare = axes[len(families)] if len(axes) > len(families) else None
+    if seen and spare is not None:  # the legend fills the empty panel
+        spare.legend(list(seen.values()), list(seen), loc="center", ncol=2, fontsize=7,
+                     frameon=False, title="● sensor   ■ map   ▲ oracle", title_fontsize=8)
+        fig.subplots_adjust(hspace=0.45, wspace=0.3)
+    elif seen:
         fig.legend(list(seen.values()), list(seen), loc="lower center", ncol=4, fontsize=7,
-                   frameon=False, bbox_to_anchor=(0.5, 0.0))  # fmt: skip
+                   frameon=False, bbox_to_anchor=(0.5, 0.0))
         fig.subplots_adjust(bottom=0.1 + 0.03 * math.ceil(len(seen) / 4), hspace=0.45,
                             wspace=0.3)  # fmt: skip
     target = out / "benchmark_success_excess.png"
@@ -233,8 +241,9 @@ def write_benchmark_report(
             f"## {family} ({n} episodes)",
             "",
             *(
-                [f"{no_opt} episodes have no path on the frozen snapshot (moving obstacles "
-                 "block every passage at t = 0): no excess is measured for them.", ""]
+                [f"{no_opt} episode{'s have' if no_opt > 1 else ' has'} no path on the frozen "
+                 "snapshot (moving obstacles block every passage at t = 0): no excess is "
+                 f"measured for {'them' if no_opt > 1 else 'it'}.", ""]
                 if no_opt else []
             ),  # fmt: skip
             "| method | sensing | success | collision | timeout | median excess | p90 excess "

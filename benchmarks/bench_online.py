@@ -64,7 +64,7 @@ def main() -> bool:
         None,
         {rows[0].name: 10e-6, rows[1].name: 10e-6, rows[2].name: 3e-6},
     )
-    cfg = NavigationConfig(str(caps_path), worlds=400, method="bench", guard=1.2)
+    cfg = NavigationConfig(str(caps_path), worlds=400, method="copi-extended", guard=1.2)
     walls = {}
     for workers in (1, 2):
         t0 = time.perf_counter()

@@ -10,7 +10,7 @@ from numpy.typing import NDArray
 from copi.geometry import ring_angles
 from copi.online import Observation, Steering, Task
 
-__all__ = ["Steered", "hit_points", "unit"]
+__all__ = ["Steered", "hit_points", "segment_distance", "unit"]
 
 
 def unit(v: NDArray[np.float64]) -> tuple[NDArray[np.float64], float]:
@@ -28,6 +28,27 @@ def hit_points(
     """The points the rays hit (those shorter than the range), relative to the agent, (h, 2)."""
     hit = ranges < max_range
     return np.column_stack([ranges[hit] * cos[hit], ranges[hit] * sin[hit]])
+
+
+def segment_distance(
+    points: NDArray[np.float64], a: NDArray[np.float64], b: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Least distance from ``points`` (h, 2) to each segment a[i] -> b[i], shape (k,);
+    inf when there are no points.
+
+    Examples
+    --------
+    >>> segment_distance(np.array([[1.0, 1.0]]), np.zeros((1, 2)), np.array([[2.0, 0.0]]))
+    array([1.])
+    """
+    if not len(points):
+        return np.full(len(a), np.inf)
+    seg = b - a
+    L2 = (seg * seg).sum(1)
+    rel = points[:, None, :] - a[None, :, :]
+    t = np.clip((rel * seg[None]).sum(-1) / np.where(L2 > 0, L2, 1.0)[None, :], 0.0, 1.0)
+    near = a[None, :, :] + t[..., None] * seg[None, :, :]
+    return np.sqrt(((points[:, None, :] - near) ** 2).sum(-1)).min(0)
 
 
 class Steered:

@@ -8,7 +8,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from copi.baselines._common import Steered, unit
+from copi.baselines._common import Steered, segment_distance, unit
 from copi.errors import InvalidArgumentError
 from copi.online import Observation, Task
 
@@ -118,11 +118,4 @@ class DWA(Steered):
         """Least distance from the agent's disc to the chosen hit points along each
         straight motion a -> b (rows), shape (k,) (inf with no such hit)."""
         pts = np.column_stack([ranges[which] * self.cos[which], ranges[which] * self.sin[which]])
-        if not len(pts):
-            return np.full(len(a), np.inf)
-        seg = b - a
-        L2 = (seg * seg).sum(1)
-        rel = pts[:, None, :] - a[None, :, :]
-        t = np.clip((rel * seg[None]).sum(-1) / np.where(L2 > 0, L2, 1.0)[None, :], 0.0, 1.0)
-        near = a[None, :, :] + t[..., None] * seg[None, :, :]
-        return np.sqrt(((pts[:, None, :] - near) ** 2).sum(-1)).min(0) - self.radius
+        return segment_distance(pts, a, b) - self.radius

@@ -8,7 +8,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from copi.baselines._common import Steered, hit_points, unit
+from copi.baselines._common import Steered, hit_points, segment_distance, unit
 from copi.errors import InvalidArgumentError
 from copi.online import Observation, Task
 
@@ -67,12 +67,8 @@ class TangentBug(Steered):
         """Whether the straight corridor towards g (up to the sensor's range) is clear."""
         u, dist = unit(g)
         end = u * min(dist, self.max_range)
-        if not len(pts):
-            return True
-        L2 = float(end @ end)
-        t = np.clip(pts @ end / L2, 0.0, 1.0) if L2 > 0 else np.zeros(len(pts))
-        d = np.hypot(*(pts - t[:, None] * end[None]).T)
-        return bool(d.min() >= self.radius + self.margin)
+        d = segment_distance(pts, np.zeros((1, 2)), end[None])[0]
+        return bool(d >= self.radius + self.margin)
 
     def _endpoints(self, ranges: NDArray[np.float64]) -> NDArray[np.float64]:
         """Points just past the ends of the visible boundary's continuous pieces, (m, 2)."""

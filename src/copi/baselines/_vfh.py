@@ -7,7 +7,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from copi.baselines._common import Steered, hit_points, unit
+from copi.baselines._common import Steered, hit_points, segment_distance, unit
 from copi.errors import InvalidArgumentError
 from copi.online import Observation, Task
 
@@ -119,12 +119,8 @@ class VFH(Steered):
     def _in_sight(self, ranges: NDArray[np.float64], aim: NDArray[np.float64]) -> bool:
         """Whether the segment to ``aim`` keeps ``radius + safety`` clear of every hit."""
         pts = hit_points(ranges, self.cos, self.sin, self.max_range)
-        if not len(pts):
-            return True
-        L2 = float(aim @ aim)
-        t = np.clip(pts @ aim / L2, 0.0, 1.0) if L2 > 0 else np.zeros(len(pts))
-        d = np.hypot(*(pts - t[:, None] * aim[None]).T)
-        return bool(d.min() >= self.radius + self.safety)
+        d = segment_distance(pts, np.zeros((1, 2)), aim[None])[0]
+        return bool(d >= self.radius + self.safety)
 
     def _candidates(self, blocked: NDArray[np.bool_], target: float) -> NDArray[np.float64]:
         n = self.sectors

@@ -152,9 +152,8 @@ def _figure_success_excess(
     import matplotlib
 
     # One distinct colour per method (tab10, then tab20's odd entries), shape per level.
-    palette = list(matplotlib.colormaps["tab10"].colors) + list(
-        matplotlib.colormaps["tab20"].colors[1::2]
-    )
+    tab10, tab20 = matplotlib.colormaps["tab10"], matplotlib.colormaps["tab20"]
+    palette = [tab10(i) for i in range(10)] + [tab20(i) for i in range(1, 20, 2)]
     for ax, family in zip(axes, families, strict=False):
         for (method, level), s in table[family].items():
             if not math.isfinite(s["excess_median"]):

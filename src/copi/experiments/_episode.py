@@ -74,8 +74,9 @@ def optimal_to_goal(
     return max(0.0, length / (1.0 + length_error_bound(quad_segs)) - sim.goal_tolerance)
 
 
-def make_task(sim: Simulator, sensing: str) -> Task:
-    """The task as a method at ``sensing`` is told it."""
+def make_task(sim: Simulator, sensing: str, strategy: str = "greedy") -> Task:
+    """The task as a method at ``sensing`` is told it (``strategy``: the global strategy
+    at level ``sensor``, "greedy" or "mapping")."""
     knows_map = check_sensing(sensing) >= 1
     return Task(
         sensing=sensing,
@@ -86,6 +87,7 @@ def make_task(sim: Simulator, sensing: str) -> Task:
         world=sim.world if knows_map else None,
         start=sim.position.copy() if knows_map else None,
         goal=sim.goal.copy() if knows_map else None,
+        strategy=strategy,
     )
 
 
@@ -96,17 +98,19 @@ def run_agent(
     sensing: str,
     max_steps: int,
     end_on_contact: bool = True,
+    strategy: str = "greedy",
 ) -> EpisodeOutcome:
     """Run ``agent`` in ``sim`` (fresh, at t = 0) at ``sensing`` until it reaches the
     goal, touches a moving obstacle (when ``end_on_contact``) or runs out of steps.
 
     The agent receives only its level's information (:mod:`copi.online`): the static
     reading is computed only at ``map`` and above, obstacle states only at ``oracle``.
+    ``strategy`` is the global strategy every method uses at level ``sensor``.
     """
     rank = check_sensing(sensing, agent.sensing, method=agent.name)
     world = sim.world
     sensor = sim.sensor
-    agent.reset(make_task(sim, sensing))
+    agent.reset(make_task(sim, sensing, strategy))
     prev_centers = sim.centers.copy()
     velocities = sim.speed * np.column_stack([np.cos(sim.headings), np.sin(sim.headings)])
     length = 0.0

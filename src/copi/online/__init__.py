@@ -13,6 +13,7 @@ from copi.online._agent import (
     check_sensing,
 )
 from copi.online._controller import ContextController, Decision
+from copi.online._mapping import Mapping
 from copi.online._strategies import GlobalStrategy, Greedy, Route, make_strategy
 
 __all__ = [
@@ -22,6 +23,7 @@ __all__ = [
     "Decision",
     "GlobalStrategy",
     "Greedy",
+    "Mapping",
     "Observation",
     "Route",
     "SENSING_LEVELS",

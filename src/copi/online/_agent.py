@@ -31,7 +31,8 @@ from numpy.typing import NDArray
 from copi.errors import InvalidArgumentError
 from copi.learning import Capabilities
 from copi.online._controller import ContextController
-from copi.online._strategies import Greedy, Route
+from copi.online._mapping import Mapping
+from copi.online._strategies import Route
 from copi.world import World
 
 __all__ = [
@@ -82,6 +83,9 @@ class Task:
     """The start in the world's frame (``map`` and ``oracle``)."""
     goal: NDArray[np.float64] | None = None
     """The goal in the world's frame (``map`` and ``oracle``)."""
+    strategy: str = "greedy"
+    """The global strategy at level ``sensor``: "greedy" (head for the goal) or
+    "mapping" (map as it goes, :class:`Mapping`). Levels with a map follow the route."""
 
 
 @dataclass(frozen=True)
@@ -122,21 +126,31 @@ class Steering:
 
     At level ``map`` and above it follows the static route (:class:`Route`, the shortest
     path on the static world, replanned when the agent loses sight of it); at ``sensor``
-    it heads for the goal (:class:`Greedy` on the relative goal). So every method at one
+    it heads for the goal (the relative goal), or with ``Task.strategy == "mapping"``
+    follows a map it builds from the ranges (:class:`Mapping`). So every method at one
     level gets the same global direction, and only its local behaviour differs.
     """
 
     def reset(self, task: Task) -> None:
         self.route: Route | None = None
+        self.mapping: Mapping | None = None
         if task.world is not None and task.start is not None and task.goal is not None:
             self.route = Route()
             self.route.reset(task.world, task.start, task.goal, task.agent_radius)
-        self.greedy = Greedy()
+        elif task.strategy == "mapping":
+            self.mapping = Mapping()
+            self.mapping.reset(task.n_rays, task.max_range, task.agent_radius)
+        elif task.strategy != "greedy":
+            raise InvalidArgumentError(
+                f"strategy must be 'greedy' or 'mapping'; got {task.strategy!r}"
+            )
 
     def aim(self, obs: Observation) -> tuple[NDArray[np.float64], float]:
         """(desired direction, distance to the point aimed at)."""
         if self.route is not None and obs.position is not None:
             return self.route.aim(obs.position)
+        if self.mapping is not None:
+            return self.mapping.aim(obs.ranges, obs.goal)
         g = obs.goal
         return np.asarray(g, dtype=np.float64), math.hypot(g[0], g[1])
 

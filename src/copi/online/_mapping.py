@@ -1,0 +1,183 @@
+"""A global strategy for an agent with no map: it maps as it goes (the `sensor` level)."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.ndimage import binary_dilation
+
+from copi.errors import InvalidArgumentError
+from copi.geometry import ring_angles
+from copi.planning._grid import GridPlanner
+
+__all__ = ["Mapping"]
+
+# Occupancy in log-odds, clamped: a hit adds _HIT, a ray passing through takes _MISS
+# off; a cell is occupied above 0. A wall, hit again and again, needs many passing rays
+# to clear (a ray grazing a wall crosses cells the wall also crosses); a disc seen for a
+# few steps clears a few steps after it has gone.
+_HIT, _MISS, _CEIL, _FLOOR = 1.0, 0.4, 4.0, -2.0
+
+
+class Mapping:
+    """Occupancy grid built online from the range ring, with octile A* replanning.
+
+    Needs only what the `sensor` level gives: the ranges and the goal relative to the
+    agent. The grid lives in the goal's frame (the goal at its centre), where the agent's
+    position is minus the relative goal, so no map and no localisation are needed. Each
+    step, the cell a ray ends in gains occupancy and cells a ray passes through lose some
+    (clamped log-odds): a moving obstacle fades once the sensor sees past where it was;
+    a wall keeps being seen. Neighbouring rays' hits less than ``join`` apart are joined
+    into a wall segment. Occupied cells grown by the agent's radius and ``margin`` are
+    blocked; unknown cells are free (the optimistic assumption of planning in unknown
+    worlds). The strategy keeps its plan until the next stretch of it becomes blocked (or
+    for ``every`` steps at most: a plan that swings from side to side at each new sight
+    of a wall never gets anywhere), and aims at the farthest point of the path within
+    ``lookahead`` that it can see in a straight line on the grid. With no path (the goal
+    walled off as far as it knows), it heads for the goal.
+
+    Parameters
+    ----------
+    cell : float
+        Side of a grid cell, agent steps.
+    extent : float
+        Half the side of the square the grid covers around the goal.
+    margin : float
+        Extra clearance beyond the agent's radius when growing occupied cells.
+    every : int
+        Steps between two plans at most.
+    lookahead : float
+        How far along the path the strategy aims.
+    join : float
+        Neighbouring rays' hits nearer than this to each other are joined into a wall.
+    """
+
+    name = "mapping"
+
+    def __init__(
+        self,
+        *,
+        cell: float = 0.5,
+        extent: float = 80.0,
+        margin: float = 0.25,
+        every: int = 25,
+        lookahead: float = 4.0,
+        join: float = 2.0,
+    ) -> None:
+        for key, v in (("cell", cell), ("extent", extent), ("lookahead", lookahead)):
+            if not (math.isfinite(v) and v > 0):
+                raise InvalidArgumentError(f"{key} must be a finite number > 0; got {v!r}")
+        if not (math.isfinite(margin) and margin >= 0):
+            raise InvalidArgumentError(f"margin must be a finite number >= 0; got {margin!r}")
+        if int(every) != every or every < 1:
+            raise InvalidArgumentError(f"every must be a positive int; got {every!r}")
+        self.cell = float(cell)
+        self.extent = float(extent)
+        self.margin = float(margin)
+        self.every = int(every)
+        self.lookahead = float(lookahead)
+        self.join = float(join)
+
+    def reset(self, n_rays: int, max_range: float, agent_radius: float) -> None:
+        """Start a new task with an empty map."""
+        n = int(math.ceil(2 * self.extent / self.cell))
+        self.n = n
+        self.occupancy = np.zeros((n, n))
+        self.planner = GridPlanner(np.ones((n, n), dtype=bool))
+        angles = ring_angles(n_rays)
+        self._dirs = np.column_stack([np.cos(angles), np.sin(angles)])
+        self.max_range = float(max_range)
+        grow = int(math.ceil((agent_radius + self.margin) / self.cell))
+        yy, xx = np.mgrid[-grow : grow + 1, -grow : grow + 1]
+        self._disc = (xx * xx + yy * yy) * self.cell**2 <= (agent_radius + self.margin) ** 2
+        # Points along each ray, every half cell, as fractions of the ray's length.
+        self._steps = np.arange(0.5 * self.cell, self.max_range, 0.5 * self.cell)
+        self.path: NDArray[np.float64] | None = None
+        self.age = 0
+        self.plans = 0
+
+    # -- the grid ---------------------------------------------------------------------
+
+    def _index(self, p: NDArray[np.float64]) -> NDArray[np.int64]:
+        """Cells (x, y) of points (k, 2) in the goal's frame (clipped to the grid)."""
+        ij = np.floor((p + self.extent) / self.cell).astype(np.int64)
+        return np.clip(ij, 0, self.n - 1)
+
+    def _centre(self, ij: Any) -> NDArray[np.float64]:
+        return np.asarray((np.asarray(ij) + 0.5) * self.cell - self.extent, dtype=np.float64)
+
+    def update(self, ranges: Any, position: NDArray[np.float64]) -> None:
+        """Fold one reading taken at ``position`` (goal frame) into the grid."""
+        r = np.asarray(ranges, dtype=np.float64)
+        along = self._steps[None, :] < (r[:, None] - 0.5 * self.cell)  # (rays, samples)
+        pts = position + self._steps[None, :, None] * self._dirs[:, None, :]
+        free = self._index(pts[along])
+        occ = self.occupancy
+        occ[free[:, 1], free[:, 0]] = np.maximum(occ[free[:, 1], free[:, 0]] - _MISS, _FLOOR)
+        hit = r < self.max_range
+        ends = position + r[:, None] * self._dirs
+        # Neighbouring hits close to each other are one surface: mark the cells between
+        # them too (with 32 rays a wall 5 away is hit every metre, and a plan would slip
+        # through the gaps, then swing to the other side once the agent came nearer).
+        nxt = np.roll(np.arange(len(r)), -1)
+        join = hit & hit[nxt] & (np.hypot(*(ends - ends[nxt]).T) <= self.join)
+        t = np.linspace(0.0, 1.0, int(math.ceil(self.join / (0.5 * self.cell))) + 1)
+        seg = ends[join, None, :] + t[None, :, None] * (ends[nxt][join] - ends[join])[:, None, :]
+        cells = self._index(np.concatenate([ends[hit], seg.reshape(-1, 2)]))
+        occ[cells[:, 1], cells[:, 0]] = np.minimum(occ[cells[:, 1], cells[:, 0]] + _HIT, _CEIL)
+
+    def _blocked(self) -> NDArray[np.bool_]:
+        return binary_dilation(self.occupancy > 0.0, structure=self._disc)
+
+    # -- planning ---------------------------------------------------------------------
+
+    def _plan(self, here: NDArray[np.int64], goal: NDArray[np.int64]) -> None:
+        self.plans += 1
+        self.age = 0
+        free = ~self._blocked()
+        free[here[1], here[0]] = True
+        free[goal[1], goal[0]] = True
+        self.planner.free[...] = free
+        plan = self.planner.shortest_path(tuple(here), tuple(goal))
+        self.path = None if plan.path is None else self._centre(plan.path)
+
+    def _clear_line(self, a: NDArray[np.float64], b: NDArray[np.float64]) -> bool:
+        """Whether the straight line a -> b crosses no blocked cell (as last planned)."""
+        k = max(2, int(math.ceil(math.dist(a, b) / (0.5 * self.cell))) + 1)
+        ij = self._index(a + np.linspace(0.0, 1.0, k)[:, None] * (b - a))
+        return bool(self.planner.free[ij[:, 1], ij[:, 0]].all())
+
+    def aim(self, ranges: Any, goal: Any) -> tuple[NDArray[np.float64], float]:
+        """(desired direction, distance to the point aimed at), from the reading and the
+        goal relative to the agent."""
+        g = np.asarray(goal, dtype=np.float64)
+        p = -g  # the agent in the goal's frame
+        self.update(ranges, p)
+        here = self._index(p[None])[0]
+        target = self._index(np.zeros((1, 2)))[0]
+        self.age += 1
+        stale = self.path is None or self.age >= self.every
+        if not stale and self.path is not None:
+            ahead = self.path[: max(2, int(self.lookahead / self.cell))]
+            ij = self._index(ahead)
+            stale = bool((self.occupancy[ij[:, 1], ij[:, 0]] > 0.0).any())
+        if stale:
+            self._plan(here, target)
+        if self.path is None or len(self.path) < 2:
+            return g, math.hypot(g[0], g[1])
+        # Drop the cells behind, then aim at the farthest one in sight within lookahead.
+        d = np.hypot(*(self.path - p).T)
+        start = int(np.argmin(d))
+        self.path = self.path[start:]
+        aim = self.path[-1] if len(self.path) == 1 else self.path[1]
+        for q in self.path[1:]:
+            if math.dist(p, q) > self.lookahead or not self._clear_line(p, q):
+                break
+            aim = q
+        if len(self.path) and math.dist(self.path[-1], aim) < 1e-9:
+            aim = np.zeros(2)  # the last cell's centre stands for the goal itself
+        v = aim - p
+        return v, math.hypot(v[0], v[1])

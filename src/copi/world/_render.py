@@ -259,7 +259,7 @@ def rasterize(
         ppos, heading, capture = pursuer
         disc(ppos, float(capture), None, PURSUER, line)
         ((cx, cy),) = px(ppos)
-        size = max(scale * 0.9, 5 * s)
+        size = max(scale * 1.3, 5 * s)
         a = np.array([0.0, 2.5, -2.5]) + float(heading)
         rad = np.array([size, 0.8 * size, 0.8 * size])
         draw.polygon(

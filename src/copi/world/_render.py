@@ -25,6 +25,8 @@ AGENT = "#d62728"
 GOAL = "#2ca02c"
 RAY = "#f0a030"
 PURSUER = "#222222"
+MOVE = "#444444"
+CHOSEN = "#7b2cbf"
 
 
 def draw_world(
@@ -134,6 +136,7 @@ def rasterize(
     rays: tuple[Any, Any, Any] | None = None,
     pursuer: tuple[Any, float, float] | None = None,
     pursuer_path: Any = None,
+    moves: tuple[Any, Any] | None = None,
     supersample: int | None = None,
 ) -> NDArray[np.uint8]:
     """Draw a world and an episode's state into an RGB image, without Matplotlib.
@@ -164,6 +167,9 @@ def rasterize(
         The homicidal chauffeur's car: a dark arrowhead along its heading inside a ring
         of its capture radius.
     pursuer_path : (t, 2), optional
+    moves : (candidates (k, 2), chosen (2,)), optional
+        Moves the agent could make from where it stands (dark grey lines) and the one it
+        made (a thick purple line), drawn three times their length.
     supersample : int, optional
         Drawing scale before the reduction (anti-aliasing); default 4 below 200 pixels,
         else 2.
@@ -255,6 +261,14 @@ def rasterize(
             position = p[-1]
     if position is not None:
         disc(position, agent_radius, AGENT)
+    if moves is not None and position is not None:
+        candidates, chosen = moves
+        (p0,) = px(position)
+        here = np.asarray(position, dtype=np.float64)
+        for v in np.asarray(candidates, dtype=np.float64).reshape(-1, 2):
+            draw.line([p0, px(here + 3 * v)[0]], fill=MOVE, width=2 * line)
+        draw.line([p0, px(here + 3 * np.asarray(chosen, dtype=float))[0]], fill=CHOSEN,
+                  width=3 * line)  # fmt: skip
     if pursuer is not None:
         ppos, heading, capture = pursuer
         disc(ppos, float(capture), None, PURSUER, line)

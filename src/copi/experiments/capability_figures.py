@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
@@ -200,10 +201,11 @@ def save_policies(caps: Capabilities, out: Path) -> Path:
     return target
 
 
-def _exponents(labels: set[tuple[int, int]], orders: tuple[int, int]) -> str:
+def _exponents(labels: Iterable[tuple[int, ...]], orders: tuple[int, int]) -> str:
     """The exponents (a, b) of the permutations o^a p^b using a transition, summarised:
     "a=0,1,2" when every b goes with those a, "b=0" when every a goes with that b."""
     na, nb = orders
+    labels = [(int(a), int(b)) for a, b in labels]
     by_a: dict[int, set[int]] = {}
     for a, b in labels:
         by_a.setdefault(a, set()).add(b)

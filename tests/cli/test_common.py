@@ -62,3 +62,38 @@ def test_compiling_notice_only_when_a_kernel_is_not_cached(
     _common.compiling_notice(["copi.online._kernels:decide"])  # once per process
     err = capsys.readouterr().err
     assert err.splitlines() == ["compiling kernels once (numba), ~2 s; later runs reuse them"]
+
+
+def _run(args: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, str]:
+    with pytest.raises(SystemExit) as exit_:
+        main(args)
+    captured = capsys.readouterr()
+    return int(exit_.value.code or 0), captured.out, captured.err
+
+
+def test_version_and_help_text(capsys: pytest.CaptureFixture[str]) -> None:
+    import copi
+
+    code, out, _ = _run(["--version"], capsys)
+    assert code == 0 and out.strip() == f"copi {copi.__version__}"
+    _, out, _ = _run(["world", "sample", "--help"], capsys)
+    assert "default_rng([seed, k])" in out
+    _, out, _ = _run(["world", "show", "--help"], capsys)
+    assert "--gif" in out and "<bool>" not in out
+    _, out, _ = _run(["world", "import-movingai", "--help"], capsys)
+    assert "row y counted" in " ".join(out.replace("│", " ").split())
+
+
+def test_plan_summarises_long_paths(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from tests.common import U_TRAP
+
+    worlds = tmp_path / "u.json"
+    save_worlds([U_TRAP], worlds)
+    # from below the U round its corners to the goal above it: a path of many vertices
+    args = ["plan", str(worlds), "--start", "20", "2", "--goal", "20", "28", "--radius", "0.5"]
+    code, out, _ = _run(args, capsys)
+    lines = out.strip().splitlines()
+    n = int(lines[0].split("(")[1].split()[0]) + 1
+    assert n > 7 and len(lines) == 1 + 7 and f"{n - 6} more vertices" in out
+    code, out, _ = _run([*args, "--vertices"], capsys)
+    assert code == 0 and len(out.strip().splitlines()) == 1 + n

@@ -9,7 +9,7 @@ import re
 import time
 from collections.abc import Callable, Iterable
 from types import TracebackType
-from typing import Any, TypeVar
+from typing import Annotated, Any, TypeVar
 
 import typer
 from rich.console import Console
@@ -21,6 +21,7 @@ from rich.progress import (
     TextColumn,
     TimeElapsedColumn,
 )
+from typer.core import TyperOption
 
 T = TypeVar("T")
 
@@ -32,10 +33,42 @@ app = typer.Typer(
     pretty_exceptions_enable=False,
 )
 world_app = typer.Typer(help="Sample, show and import worlds.", no_args_is_help=True)
+
+
+def _flag_type(self: TyperOption, ctx: Any) -> str | None:
+    """Typer's help panels give on/off flags (``--gif``, ``--help``) a "<bool>" type,
+    as if they took a value; they take none."""
+    if self.is_flag and not self.count:
+        return None
+    return _option_type(self, ctx)
+
+
+_option_type = TyperOption.display_type_rich
+TyperOption.display_type_rich = _flag_type  # type: ignore[method-assign]
 app.add_typer(world_app, name="world")
 
 console = Console(stderr=True, soft_wrap=True)
 out = Console(soft_wrap=True)
+
+
+def _print_version(value: bool) -> None:
+    if value:
+        from copi import __version__
+
+        out.print(f"copi {__version__}", highlight=False)
+        raise typer.Exit()
+
+
+@app.callback()
+def _root(
+    version: Annotated[
+        bool,
+        typer.Option(
+            "--version", callback=_print_version, is_eager=True, help="Print the version and exit."
+        ),
+    ] = False,
+) -> None:
+    """Context-based Online Policy Instantiation: worlds, capabilities, experiments."""
 
 
 class PlainProgress:

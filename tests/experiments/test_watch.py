@@ -52,3 +52,11 @@ def test_bad_inputs(caps, tmp_path: Path) -> None:  # type: ignore[no-untyped-de
     w = watch_episode("straight", max_steps=2)
     with pytest.raises(InvalidArgumentError, match=r"must end in \.gif, \.mp4, \.png; got 'x.avi'"):
         save_watch(w, tmp_path / "x.avi")
+
+
+def test_mp4_without_ffmpeg_is_refused(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr("copi.experiments.watch.shutil.which", lambda _: None)
+    w = watch_episode("straight", max_steps=2)
+    with pytest.raises(InvalidArgumentError, match="writing .mp4 needs ffmpeg on the PATH"):
+        save_watch(w, tmp_path / "x.mp4")
+    assert not (tmp_path / "x.mp4").exists()

@@ -38,8 +38,10 @@ class Step:
     action: NDArray[np.float64]
     """The velocity it sent, shape (2,)."""
     text: str
-    """The decision in words: copi's chain (node, landmark, template and group element,
-    the chosen policy among the template's), or the baseline's name and move."""
+    """The decision in words: copi's chain (node, landmark, template and group element)
+    and, on a second line, the chosen policy among the template's (named in the
+    template's frame) with the heading it gives in the world; or the baseline's name and
+    move."""
     candidates: NDArray[np.float64]
     """copi's candidate first moves in the world frame, shape (k, 2) (empty for
     baselines)."""
@@ -90,18 +92,23 @@ class _Explaining:
             choice = {None: "none (no policy here)", "escape": "escape (none safe)"}.get(
                 d.choice, d.choice
             )
+            options = (
+                " ".join(d.candidates) if len(d.candidates) <= 6 else f"{len(d.candidates)}"
+            )
+            where = ""
+            if d.choice not in (None, "escape"):
+                where = f", heading {_heading(action)} in the world"
             text = (
                 f"node {d.node}{' (unfamiliar)' if d.unfamiliar else ''} -> {landmark} -> "
-                f"template {d.template}, g = {d.element}; policy {choice} of "
-                f"{{{' '.join(d.candidates)}}}"
+                f"template {d.template}, g = {d.element}\n"
+                f"policy {choice} in the template's frame (of {options}){where}"
             )
             cands = d.candidate_actions
         else:
             action = np.asarray(agent.act(obs), dtype=np.float64)
             speed = math.hypot(action[0], action[1])
-            heading = math.degrees(math.atan2(action[1], action[0])) % 360
             text = (
-                f"{agent.name}: move {speed:.2f} towards {heading:.0f} deg"
+                f"{agent.name}: step {speed:.2f}, heading {_heading(action)}"
                 if speed > 1e-9
                 else f"{agent.name}: stays put"
             )
@@ -111,6 +118,11 @@ class _Explaining:
 
     def counters(self) -> dict[str, Any]:
         return self.agent.counters() if hasattr(self.agent, "counters") else {}
+
+
+def _heading(v: Any) -> str:
+    """A velocity's direction in degrees counter-clockwise from east (+x)."""
+    return f"{math.degrees(math.atan2(v[1], v[0])) % 360:.0f} deg"
 
 
 def watch_episode(
@@ -205,7 +217,7 @@ def _frame(watched: WatchedEpisode, t: int, path: Any, traces: Any, size: int) -
     )  # fmt: skip
     font_px = max(10, size // 36)
     line_h = int(font_px * 1.35)
-    img = Image.new("RGB", (size, height + 3 * line_h + 8), "white")
+    img = Image.new("RGB", (size, height + 4 * line_h + 8), "white")
     img.paste(Image.fromarray(picture), (0, 0))
     draw = ImageDraw.Draw(img)
     font = _font(font_px)
@@ -213,8 +225,9 @@ def _frame(watched: WatchedEpisode, t: int, path: Any, traces: Any, size: int) -
     head = f"{watched.method} @ {watched.sensing}   {sim.world.name}   step {t}/{len(path) - 1}"
     draw.text((x, y), head, fill="#222222", font=font)
     if t < len(watched.steps):
-        text = _fit(watched.steps[t].text, font, size - 12)
-        draw.text((x, y + line_h), text, fill="#222222", font=font)
+        for k, text in enumerate(watched.steps[t].text.split("\n")[:2]):
+            draw.text((x, y + (1 + k) * line_h), _fit(text, font, size - 12), fill="#222222",
+                      font=font)  # fmt: skip
     if last:
         out = watched.outcome
         words = {
@@ -222,14 +235,14 @@ def _frame(watched: WatchedEpisode, t: int, path: Any, traces: Any, size: int) -
             "collision": f"collision: touched a moving obstacle at step {out.steps}",
             "timeout": f"timeout: goal not reached in {out.steps} steps",
         }[out.outcome]
-        draw.text((x, y + 2 * line_h), words, fill=OUTCOME_COLORS[out.outcome], font=font)
+        draw.text((x, y + 3 * line_h), words, fill=OUTCOME_COLORS[out.outcome], font=font)
     else:
         legend = (
             "grey: the template's moves; purple: the chosen one; orange: rays"
             if len(watched.steps[t].candidates)
             else "purple: the move made; orange: rays"
         )
-        draw.text((x, y + 2 * line_h), _fit(legend, font, size - 12), fill="#777777", font=font)
+        draw.text((x, y + 3 * line_h), _fit(legend, font, size - 12), fill="#777777", font=font)
     return np.asarray(img)
 
 

@@ -2,13 +2,26 @@
 
 from __future__ import annotations
 
+import importlib
+import math
+import os
 import re
-from collections.abc import Callable
-from typing import TypeVar
+import time
+from collections.abc import Callable, Iterable
+from types import TracebackType
+from typing import Annotated, Any, TypeVar
 
 import typer
 from rich.console import Console
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    TaskID,
+    TextColumn,
+    TimeElapsedColumn,
+)
+from typer.core import TyperOption
 
 T = TypeVar("T")
 
@@ -20,14 +33,142 @@ app = typer.Typer(
     pretty_exceptions_enable=False,
 )
 world_app = typer.Typer(help="Sample, show and import worlds.", no_args_is_help=True)
+
+
+def _flag_type(self: TyperOption, ctx: Any) -> str | None:
+    """Typer's help panels give on/off flags (``--gif``, ``--help``) a "<bool>" type,
+    as if they took a value; they take none."""
+    if self.is_flag and not self.count:
+        return None
+    return _option_type(self, ctx)
+
+
+_option_type = TyperOption.display_type_rich
+TyperOption.display_type_rich = _flag_type  # type: ignore[method-assign]
 app.add_typer(world_app, name="world")
 
 console = Console(stderr=True, soft_wrap=True)
 out = Console(soft_wrap=True)
 
 
-def progress() -> Progress:
-    """The progress bar used by long commands (on stderr; silent when not a terminal)."""
+def _print_version(value: bool) -> None:
+    if value:
+        from copi import __version__
+
+        out.print(f"copi {__version__}", highlight=False)
+        raise typer.Exit()
+
+
+@app.callback()
+def _root(
+    version: Annotated[
+        bool,
+        typer.Option(
+            "--version", callback=_print_version, is_eager=True, help="Print the version and exit."
+        ),
+    ] = False,
+) -> None:
+    """Context-based Online Policy Instantiation: worlds, capabilities, experiments."""
+
+
+class PlainProgress:
+    """Progress as plain lines on stderr, for logs and pipes (where a bar would print
+    nothing): ``label: done/total (pct), rate/s, ETA``, at most every ``every`` seconds
+    and once at the end of each task. The subset of :class:`rich.progress.Progress`'s
+    interface the commands use."""
+
+    def __init__(self, *, every: float = 10.0, console: Console = console) -> None:
+        self.every = float(every)
+        self.console = console
+        self._tasks: list[dict[str, Any]] = []
+
+    def __enter__(self) -> PlainProgress:
+        return self
+
+    def __exit__(
+        self,
+        kind: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        for task in self._tasks:  # a last line for tasks that moved since their last one
+            if task["printed"] != task["done"] and kind is None:
+                self._print(task)
+
+    def add_task(self, description: str, total: float | None = None, **_: Any) -> TaskID:
+        now = time.monotonic()
+        self._tasks.append(
+            {"label": description, "total": total, "done": 0.0, "start": now,
+             "last": now, "printed": None}
+        )  # fmt: skip
+        return TaskID(len(self._tasks) - 1)
+
+    def update(
+        self,
+        task_id: TaskID,
+        *,
+        completed: float | None = None,
+        advance: float | None = None,
+        total: float | None = None,
+        **_: Any,
+    ) -> None:
+        task = self._tasks[task_id]
+        if total is not None:
+            task["total"] = total
+        if completed is not None:
+            task["done"] = completed
+        if advance is not None:
+            task["done"] += advance
+        now = time.monotonic()
+        finished = task["total"] is not None and task["done"] >= task["total"]
+        if task["printed"] != task["done"] and (finished or now - task["last"] >= self.every):
+            self._print(task)
+
+    def advance(self, task_id: TaskID, advance: float = 1) -> None:
+        self.update(task_id, advance=advance)
+
+    def _print(self, task: dict[str, Any]) -> None:
+        now = time.monotonic()
+        done, total = task["done"], task["total"]
+        elapsed = now - task["start"]
+        rate = done / elapsed if elapsed > 0 else math.nan
+        parts = [f"{task['label']}: {done:g}"]
+        if total:
+            parts[0] += f"/{total:g} ({100 * done / total:.0f} %)"
+        if done and math.isfinite(rate):
+            parts.append(
+                f"{rate:,.0f}/s" if rate >= 100 else f"{rate:.1f}/s" if rate >= 1
+                else f"{1 / rate:.1f} s each"
+            )  # fmt: skip
+            if total and done < total:
+                parts.append(f"ETA {_duration((total - done) / rate)}")
+        parts.append(f"elapsed {_duration(elapsed)}")
+        self.console.print(", ".join(parts), highlight=False, markup=False)
+        task["last"] = now
+        task["printed"] = done
+
+
+def _duration(seconds: float) -> str:
+    s = round(seconds)
+    if s < 60:
+        return f"{s}s"
+    if s < 3600:
+        return f"{s // 60}m{s % 60:02d}s"
+    return f"{s // 3600}h{s % 3600 // 60:02d}m"
+
+
+def progress() -> Progress | PlainProgress:
+    """The progress display of long commands, on stderr: a bar on a terminal, else
+    plain periodic lines (every ``COPI_PROGRESS_EVERY`` seconds, default 10). Says first,
+    once, when numba's kernels are about to be compiled (:func:`compiling_notice`)."""
+    compiling_notice()
+    if not console.is_terminal:
+        every = os.environ.get("COPI_PROGRESS_EVERY", "10")
+        try:
+            seconds = float(every)
+        except ValueError:
+            seconds = 10.0
+        return PlainProgress(every=seconds)
     return Progress(
         TextColumn("{task.description}"),
         BarColumn(),
@@ -39,10 +180,45 @@ def progress() -> Progress:
 
 
 def _with_progress(label: str, total: int, run: Callable[[Callable[[int, int], None]], T]) -> T:
-    """``run(report)`` under a progress bar that ``report(done, total)`` advances."""
+    """``run(report)`` under a progress display that ``report(done, total)`` advances."""
     with progress() as bar:
         task = bar.add_task(label, total=total)
         return run(lambda done, _total: bar.update(task, completed=done))
+
+
+# numba kernels (a dispatcher each module calls first) and their compile time, seconds,
+# measured on one core of a 2024 laptop-class machine
+_KERNELS = {
+    "copi.geometry._kernels:step_world": 4,
+    "copi.planning._kernels:visibility_edges": 8,
+    "copi.online._kernels:decide": 2,
+}
+_noticed = False
+
+
+def compiling_notice(kernels: Iterable[str] | None = None) -> None:
+    """One line on stderr when some of copi's numba ``kernels`` (default: the
+    simulator's, the planner's, the online chain's) have no valid on-disk cache yet,
+    so that the first run's silent compilation is explained. Said once per process."""
+    global _noticed
+    if _noticed:
+        return
+    seconds = 0
+    for name in kernels or _KERNELS:
+        module, _, func = name.partition(":")
+        try:
+            dispatcher = getattr(importlib.import_module(module), func)
+            cached = bool(dispatcher._cache._cache_file._load_index())
+        except Exception:  # numba's cache internals moved: say nothing rather than fail
+            cached = True
+        if not cached:
+            seconds += _KERNELS.get(name, 3)
+    if seconds:
+        _noticed = True
+        console.print(
+            f"compiling kernels once (numba), ~{seconds} s; later runs reuse them",
+            highlight=False,
+        )
 
 
 def safe_name(name: str) -> str:

@@ -20,8 +20,9 @@ def world_sample(
 ) -> None:
     """Draw the paper's random worlds (4-12 sided polygons) into a world file.
 
-    World k is drawn from numpy's default_rng([seed, k]).
+    World k is drawn from numpy's default_rng(\\[seed, k]).
     """
+    # "\[": help text is Rich markup, which would take "[seed, k]" for a style tag
     from copi.world import random_world, save_worlds
 
     worlds = []
@@ -83,7 +84,11 @@ def world_import_movingai(
     near: Annotated[
         tuple[int, int] | None,
         typer.Option(
-            "--near", help="Keep the free region holding this cell (x y); default: the largest."
+            "--near",
+            help="Keep the free region holding this map cell: column x, row y counted "
+            "from the top, as in the .map file. Not world coordinates (copi plan's --start), "
+            "whose y points up: cell (x, y) is at (x + 0.5, height - y - 0.5). "
+            "Default: the largest region.",
         ),
     ] = None,
 ) -> None:
@@ -102,23 +107,32 @@ def world_import_movingai(
     )
 
 
+_PLAN_ENDS = 3
+"""Vertices printed at each end of a long path."""
+
+
 @app.command("plan")
 def plan_command(
     world_file: Annotated[Path, typer.Argument(help="World file (JSON).")],
     start: Annotated[
         tuple[float, float] | None,
-        typer.Option("--start", help="Start x y (default: the world's)."),
+        typer.Option("--start", help="Start x y, world coordinates (default: the world's)."),
     ] = None,
     goal: Annotated[
-        tuple[float, float] | None, typer.Option("--goal", help="Goal x y (default: the world's).")
+        tuple[float, float] | None,
+        typer.Option("--goal", help="Goal x y, world coordinates (default: the world's)."),
     ] = None,
     radius: Annotated[float, typer.Option("--radius", min=0.0, help="Agent radius.")] = 0.0,
     index: Annotated[int, typer.Option("--index", min=0, help="Which world of the file.")] = 0,
     output: Annotated[
         Path | None, typer.Option("-o", "--output", help="Draw the path to this PNG.")
     ] = None,
+    vertices: Annotated[
+        bool, typer.Option("--vertices", help="Print every vertex of the path.")
+    ] = False,
 ) -> None:
-    """Print the shortest path between two points of a world (and draw it)."""
+    """Print the length of the shortest path between two points of a world (world
+    coordinates, y up), its first and last vertices (all with --vertices), and draw it."""
     from copi.errors import InvalidArgumentError
     from copi.planning import shortest_path
     from copi.world import load_worlds
@@ -140,8 +154,14 @@ def plan_command(
         raise typer.Exit(1)
     assert plan.path is not None
     out.print(f"length {plan.length:.6f} ({len(plan.path) - 1} segments)")
-    for x, y in plan.path:
-        out.print(f"  {x:.6g} {y:.6g}")
+    shown = plan.path if vertices or len(plan.path) <= 2 * _PLAN_ENDS + 1 else [
+        *plan.path[:_PLAN_ENDS], None, *plan.path[-_PLAN_ENDS:]
+    ]  # fmt: skip
+    for vertex in shown:
+        if vertex is None:
+            out.print(f"  ... {len(plan.path) - 2 * _PLAN_ENDS} more vertices (all: --vertices)")
+        else:
+            out.print(f"  {vertex[0]:.6g} {vertex[1]:.6g}")
     if output is not None:
         from copi.experiments.figures import save_plan_png
 

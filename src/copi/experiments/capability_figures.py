@@ -5,7 +5,9 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Iterable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -15,14 +17,27 @@ from copi.learning import Capabilities, Operator, PermutationAutomaton, local_wo
 
 __all__ = ["fig2_operators", "save_capability_figures"]
 
-_COLOURS = [
-    "#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f",
-    "#bcbd22", "#17becf",
-]  # fmt: skip
+def _palette(n: int) -> list[tuple[float, float, float, float]]:
+    """``n`` distinct colours, one per template: Matplotlib's qualitative tab10, tab20,
+    then tab20 + tab20b + tab20c (60); beyond that, evenly spaced hues (not cycled, so
+    two templates never share a colour)."""
+    from matplotlib import colormaps
+
+    if n <= 10:
+        return [colormaps["tab10"](i) for i in range(n)]
+    if n <= 20:
+        return [colormaps["tab20"](i) for i in range(n)]
+    if n <= 60:
+        return [colormaps[m](i) for m in ("tab20", "tab20b", "tab20c") for i in range(20)][:n]
+    return [colormaps["hsv"](i / n) for i in range(n)]
 
 
-def _colour(i: int) -> str:
-    return _COLOURS[i % len(_COLOURS)]
+def _direction_colours(n: int) -> list[tuple[float, float, float, float]]:
+    """A colour per compass direction (E first, counter-clockwise), on a cyclic map of
+    hues so that neighbouring directions look alike and none fades into the paper."""
+    from matplotlib import colormaps
+
+    return [colormaps["hsv"](0.9 * i / n) for i in range(n)]
 
 
 def fig2_operators() -> tuple[Operator, Operator]:
@@ -48,11 +63,12 @@ def save_context_map(caps: Capabilities, out: Path) -> Path:
 
     segs = xy[caps.edges]
     ax.add_collection(LineCollection(segs, colors="#bbbbbb", linewidths=0.3, zorder=1))
-    colours = [_colour(int(t)) for t in caps.node_template]
+    palette = _palette(len(caps.reduction.templates))
+    colours = [palette[int(t)] for t in caps.node_template]
     ax.scatter(xy[:, 0], xy[:, 1], s=6, c=colours, zorder=2)
     for j, (x, y) in enumerate(lm_xy):
         t = int(caps.reduction.template_of[j])
-        ax.scatter([x], [y], s=90, c=_colour(t), edgecolors="black", linewidths=0.8, zorder=3)
+        ax.scatter([x], [y], s=90, color=palette[t], edgecolors="black", linewidths=0.8, zorder=3)
         ax.annotate(str(j), (x, y), fontsize=6, ha="center", va="center", zorder=4)
     ax.set_title(
         f"context map: {len(nodes)} nodes, {len(caps.edges)} edges -> "
@@ -95,7 +111,7 @@ def save_skeleton_curve(caps: Capabilities, out: Path) -> Path:
     return target
 
 
-def _polar(ax, ranges: np.ndarray, max_range: float, colour: str) -> None:  # type: ignore[no-untyped-def]
+def _polar(ax, ranges: np.ndarray, max_range: float, colour: Any) -> None:  # type: ignore[no-untyped-def]
     a = ring_angles(len(ranges))
     pts = np.column_stack([ranges * np.cos(a), ranges * np.sin(a)])
     loop = np.vstack([pts, pts[:1]])
@@ -121,10 +137,11 @@ def save_landmarks(caps: Capabilities, out: Path) -> Path:
     fig = _figure(1.5 * cols, 1.6 * rows + 0.4)
     red = caps.reduction
     templates = set(red.templates.tolist())
+    palette = _palette(len(red.templates))
     for j in range(n):
         ax = fig.add_subplot(rows, cols, j + 1)
         t = int(red.template_of[j])
-        _polar(ax, pts[j], max_range, _colour(t))
+        _polar(ax, pts[j], max_range, palette[t])
         word = caps.group.words[int(red.element[j])] or "id"
         ax.set_title(f"{j} -> T{t} [{word}]", fontsize=6)
         if j in templates:
@@ -151,6 +168,7 @@ def save_policies(caps: Capabilities, out: Path) -> Path:
     cols = min(8, n)
     rows = math.ceil(n / cols)
     fig = _figure(1.9 * cols, 2.0 * rows + 0.4)
+    colours = _direction_colours(len(pol.names))
     for t in range(n):
         ax = fig.add_subplot(rows, cols, t + 1)
         world = local_world(templates[t], max_range)
@@ -160,12 +178,12 @@ def save_policies(caps: Capabilities, out: Path) -> Path:
         for d in range(len(pol.names)):
             path = pol.path(t, d)
             if len(path):
-                ax.plot(path[:, 0], path[:, 1], color=_colour(d), lw=1.1)
+                ax.plot(path[:, 0], path[:, 1], color=colours[d], lw=1.1)
                 ax.annotate(
                     "",
                     xy=tuple(path[-1]),
                     xytext=tuple(path[-2]),
-                    arrowprops={"arrowstyle": "->", "color": _colour(d), "lw": 1.1},
+                    arrowprops={"arrowstyle": "->", "color": colours[d], "lw": 1.1},
                 )
         ax.plot([0], [0], "ko", ms=3)
         ax.set_xlim(-max_range, max_range)
@@ -174,7 +192,8 @@ def save_policies(caps: Capabilities, out: Path) -> Path:
         ax.set_xticks([])
         ax.set_yticks([])
         names = [pol.names[d] for d in range(len(pol.names)) if pol.passable[t, d]]
-        ax.set_title(f"T{t}: {' '.join(names) or 'none'}", fontsize=6)
+        listed = " ".join(names) if len(names) <= 5 else f"{len(names)} of {len(pol.names)}"
+        ax.set_title(f"T{t}: {listed or 'none'}", fontsize=6)
     fig.suptitle(f"{pol.n_policies} local policies ({pol.learner}) on {n} templates", fontsize=8)
     fig.tight_layout()
     target = out / "fig1_policies.png"
@@ -182,49 +201,73 @@ def save_policies(caps: Capabilities, out: Path) -> Path:
     return target
 
 
+def _exponents(labels: Iterable[tuple[int, ...]], orders: tuple[int, int]) -> str:
+    """The exponents (a, b) of the permutations o^a p^b using a transition, summarised:
+    "a=0,1,2" when every b goes with those a, "b=0" when every a goes with that b."""
+    na, nb = orders
+    labels = [(int(a), int(b)) for a, b in labels]
+    by_a: dict[int, set[int]] = {}
+    for a, b in labels:
+        by_a.setdefault(a, set()).add(b)
+    if all(len(bs) == nb for bs in by_a.values()):
+        return "a=" + ",".join(str(a) for a in sorted(by_a))
+    by_b: dict[int, set[int]] = {}
+    for a, b in labels:
+        by_b.setdefault(b, set()).add(a)
+    if all(len(az) == na for az in by_b.values()):
+        return "b=" + ",".join(str(b) for b in sorted(by_b))
+    return " ".join(f"{a}{b}" for a, b in sorted(labels))
+
+
 def save_automaton(out: Path) -> Path:
-    """Fig. 2: the automaton built from the toy operators, transitions labelled with
-    the exponents (a, b) of the permutations o^a p^b that use them."""
-    from matplotlib.patches import Circle
+    """Fig. 2: the automaton built from the toy operators, each transition labelled with
+    the exponents (a, b) of the permutations o^a p^b that use it."""
+    from matplotlib.patches import Circle, FancyArrowPatch
 
     fa = PermutationAutomaton.from_operators(fig2_operators())
-    fig = _figure(6.5, 5.0)
+    orders = (
+        1 + max(a for labels in fa.transitions.values() for a, _ in labels),
+        1 + max(b for labels in fa.transitions.values() for _, b in labels),
+    )
+    fig = _figure(6.0, 4.8)
     ax = fig.add_subplot()
+    # the wheel 1-4 around 5 (o rotates the ring; every ring element feeds 5), then 6, 7
+    r = 1.7
     ring = {
-        i: (math.cos(math.pi / 2 - math.pi * i / 2), math.sin(math.pi / 2 - math.pi * i / 2))
+        i: (r * math.cos(math.radians(135 - 90 * i)), r * math.sin(math.radians(135 - 90 * i)))
         for i in range(4)
     }
-    pos = {**ring, 4: (2.4, 0.0), 5: (3.6, 0.8), 6: (3.6, -0.8)}
+    pos = {**ring, 4: (0.0, 0.0), 5: (3.3, 1.1), 6: (3.3, -1.1)}
+    circles = {}
     for i, (x, y) in pos.items():
-        ax.add_patch(Circle((x, y), 0.22, fc="white", ec="black", zorder=3))
-        ax.text(x, y, str(i + 1), ha="center", va="center", zorder=4, fontsize=10)
+        circles[i] = ax.add_patch(Circle((x, y), 0.26, fc="white", ec="black", lw=1.0, zorder=3))
+        ax.text(x, y, str(i + 1), ha="center", va="center", zorder=4, fontsize=11)
     for (u, v), labels in sorted(fa.transitions.items()):
         (x0, y0), (x1, y1) = pos[u], pos[v]
-        rad = 0.25 if (v, u) in fa.transitions else 0.0
-        ax.annotate(
-            "",
-            xy=(x1, y1),
-            xytext=(x0, y0),
-            arrowprops={
-                "arrowstyle": "-|>",
-                "shrinkA": 12,
-                "shrinkB": 12,
-                "connectionstyle": f"arc3,rad={rad}",
-                "color": "#444444",
-                "lw": 0.8,
-            },
-            zorder=2,
-        )
-        text = ",".join(f"{a}{b}" for a, b in sorted(labels))
-        mx, my = (x0 + x1) / 2, (y0 + y1) / 2
-        ax.text(mx + 0.12 * (y1 - y0), my - 0.12 * (x1 - x0), text, fontsize=5.5, color="#1f4e99")
-    ax.set_xlim(-1.5, 4.3)
-    ax.set_ylim(-1.6, 1.6)
+        rad = 0.3 if (v, u) in fa.transitions else 0.0
+        ax.add_patch(
+            FancyArrowPatch(
+                (x0, y0), (x1, y1), patchA=circles[u], patchB=circles[v], shrinkA=1,
+                shrinkB=1, arrowstyle="-|>", mutation_scale=11,
+                connectionstyle=f"arc3,rad={rad}", color="#444444", lw=0.9, zorder=2,
+            )
+        )  # fmt: skip
+        # on the curve's midpoint: a quadratic arc's peak is half its control offset
+        dx, dy = x1 - x0, y1 - y0
+        mx, my = (x0 + x1) / 2 + 0.5 * rad * dy, (y0 + y1) / 2 - 0.5 * rad * dx
+        ax.text(
+            mx, my, _exponents(labels, orders), fontsize=7.5, color="#1f4e99", ha="center",
+            va="center", zorder=5,
+            bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "none", "alpha": 0.9},
+        )  # fmt: skip
+    ax.set_xlim(-2.3, 4.0)
+    ax.set_ylim(-2.2, 2.2)
     ax.set_aspect("equal")
     ax.axis("off")
     ax.set_title(
-        "Fig. 2: automaton of o (rotate elements 1-4) and p (swap 6-7);\n"
-        "labels ab: the transition belongs to o^a p^b",
+        "Fig. 2: automaton of o (rotate elements 1-4) and p (swap 6-7)\n"
+        "label: exponents of the permutations o^a p^b using the transition\n"
+        "(a=0,1: those a, with any b; b=0: that b, with any a)",
         fontsize=8,
     )
     fig.tight_layout()

@@ -76,28 +76,49 @@ def _fmt(key: str, value: Any) -> str:
     return f"{value:.2f}"
 
 
+_OUTCOME_COLOURS = {"success": "#2ca02c", "collision": "#d62728", "timeout": "#666666"}
+
+
+def _outcome_title(t: dict[str, Any]) -> tuple[str, str]:
+    """A panel's title (episode, outcome, when) and its colour."""
+    steps = len(t["path"]) - 1
+    outcome = t.get("outcome")
+    words = {
+        "success": f"success in {steps} steps",
+        "collision": f"collision at step {steps}",
+        "timeout": f"timeout after {steps} steps",
+    }.get(outcome or "", f"{steps} steps (outcome not recorded)")
+    return f"episode {t['episode']}: {words}", _OUTCOME_COLOURS.get(outcome or "", "black")
+
+
 def _fig3(trajectories: list[dict[str, Any]], out: Path, method: str) -> Path | None:
-    """Four worlds with obstacle traces, the agent's path in red and the goal."""
+    """The first four recorded episodes: the agent's path in red from its start (ring),
+    the obstacles' traces in blue with the discs where they were when the episode ended,
+    the goal; each panel titled with its outcome, and a collision marked where it
+    happened."""
     picks = trajectories[:4]
     if not picks:
         return None
-    fig = _figure(3.4 * len(picks), 3.6)
+    fig = _figure(3.4 * len(picks), 3.9)
     for i, t in enumerate(picks):
         ax = fig.add_subplot(1, len(picks), i + 1)
         world = World.from_dict(t["world"])
         traces = np.asarray(t["traces"])
+        path = np.asarray(t["path"])
         draw_world(
-            ax,
-            world,
-            centers=traces[-1],
-            radii=t["radii"],
-            traces=traces,
-            path=np.asarray(t["path"]),
-            start=t["path"][0],
-            goal=t["goal"],
-            title=f"episode {t['episode']}",
-        )
-    fig.suptitle(f"Fig. 3 — {method}: obstacle traces (blue), agent (red), goal", fontsize=9)
+            ax, world, centers=traces[-1], radii=t["radii"], traces=traces, path=path,
+            start=path[0], goal=t["goal"],
+        )  # fmt: skip
+        title, colour = _outcome_title(t)
+        ax.set_title(title, fontsize=8.5, color=colour)
+        if t.get("outcome") == "collision":
+            ax.plot(*path[-1], marker="o", ms=13, mfc="none", mec="black", mew=1.4, zorder=8)
+    fig.suptitle(
+        f"Fig. 3 — {method}: the agent's path (red, from the ring) to the goal (star); "
+        "obstacles' traces (blue), their discs drawn at their final positions; "
+        "a black ring marks a collision",
+        fontsize=8.5,
+    )
     fig.tight_layout()
     target = out / f"fig3_{_slug(method)}.png"
     fig.savefig(target)
@@ -105,28 +126,47 @@ def _fig3(trajectories: list[dict[str, Any]], out: Path, method: str) -> Path | 
 
 
 def _fig4(excess: dict[str, np.ndarray], out: Path) -> Path:
-    """Histogram of path excess over the stationary optimum, median marked (paper Fig. 4);
-    several methods side by side."""
+    """Histogram of path excess over the stationary optimum, in %, per method, its median
+    marked in the method's colour (paper Fig. 4). Excesses above the 98th percentile of
+    the pooled episodes go into one last bin, labelled with its threshold."""
+    from matplotlib import colormaps
+
     fig = _figure(7.0, 4.2)
     ax = fig.add_subplot()
-    finite = [e[np.isfinite(e)] for e in excess.values()]
-    hi = max([float(np.percentile(e, 98)) for e in finite if len(e)] + [0.5])
-    bins = np.linspace(0, hi, 40)
-    colours = ["#1f77b4", "#ff7f0e", "#9467bd", "#8c564b"]
-    for (method, e), c in zip(excess.items(), colours, strict=False):
-        e = e[np.isfinite(e)]
+    finite = {m: 100 * e[np.isfinite(e)] for m, e in excess.items()}
+    pooled = np.concatenate([e for e in finite.values()] + [np.zeros(0)])
+    hi = max(float(np.percentile(pooled, 98)) if len(pooled) else 0.0, 50.0)
+    width = hi / 40
+    bins = np.append(np.linspace(0, hi, 41), hi + width)  # the last bin: everything above
+    plotted = False
+    over: list[tuple[int, Any]] = []
+    for k, (method, e) in enumerate(finite.items()):
         if not len(e):
             continue
-        ax.hist(
-            np.clip(e, 0, hi), bins=bins, color=c, alpha=0.55, label=f"{method} ({len(e)} episodes)"
-        )
+        c = colormaps["tab10"](k % 10)
+        clipped = np.minimum(e, hi + width / 2)
+        ax.hist(clipped, bins=bins, color=c, alpha=0.35, histtype="stepfilled")
+        ax.hist(clipped, bins=bins, color=c, lw=1.0, histtype="step",
+                label=f"{method} ({len(e)} successful episodes)")  # fmt: skip
         med = float(np.median(e))
-        ax.axvline(med, color="#2ca02c", lw=1.5)
-        ax.annotate(f"median {100 * med:.1f} %", (med, ax.get_ylim()[1] * 0.9), fontsize=8,
-                    color="#2ca02c", xytext=(4, 0), textcoords="offset points")  # fmt: skip
-    ax.set_xlabel("path excess over the stationary optimum (path / optimal - 1)")
+        ax.axvline(med, color=c, lw=1.5, ls="--", label=f"{method}: median {med:.1f} %")
+        over.append((int((e > hi).sum()), c))
+        plotted = True
+    top = ax.get_ylim()[1]
+    for k, (count, c) in enumerate(over):  # how many each method has in the last bin
+        ax.text(hi + width / 2, top * (0.3 + 0.07 * k), str(count), color=c, fontsize=7,
+                ha="center")  # fmt: skip
+    ax.axvspan(hi, hi + width, color="#eeeeee", zorder=0)
+    ticks = [t for t in ax.get_xticks() if 0 <= t < hi - width]
+    ax.set_xticks([*ticks, hi + width / 2])
+    ax.set_xticklabels([f"{t:.0f}" for t in ticks] + [f"> {hi:.0f}"])
+    ax.set_xlim(0, hi + width)
+    ax.set_xlabel("path excess over the stationary optimum, % (path / optimal − 1)")
     ax.set_ylabel("episodes")
-    ax.legend(fontsize=8)
+    if plotted:
+        ax.legend(fontsize=8)
+    else:
+        ax.text(0.5, 0.5, "no successful episode", transform=ax.transAxes, ha="center")
     fig.tight_layout()
     target = out / "fig4_excess.png"
     fig.savefig(target)

@@ -132,11 +132,17 @@ class ChauffeurEnv(ParallelEnv):  # type: ignore[misc]
         return obs, rewards, terms, truncs, infos
 
     def render(self) -> NDArray[np.uint8] | None:
+        """The chase as an RGB image (400 x 400): walls, moving obstacles, the evader
+        (red, with its rays and path) and the car (a dark arrowhead along its heading in
+        a ring of the capture radius, with its path in grey). There is no goal."""
         if self.render_mode is None or self.game is None:
             return None
-        from copi.world._render import render_rgb
+        from copi.world import render_rgb
 
-        return render_rgb(self.game.sim)
+        g = self.game
+        car = (g.car.position, g.car.heading, self.params.capture_radius)
+        path = np.asarray(g.car_path) if g.car_path else None
+        return render_rgb(g.sim, goal=False, pursuer=car, pursuer_path=path)
 
     def close(self) -> None:
         self.game = None

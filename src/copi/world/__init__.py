@@ -17,7 +17,7 @@ from copi.world._family_maps import MOVINGAI_ENV, MapsParams, map_window_world, 
 from copi.world._family_polygon import PolygonParams, is_star_shaped, polygon_world
 from copi.world._generate import WorldParams, place_obstacles, random_world, sample_start_goal
 from copi.world._io import load_worlds, save_worlds
-from copi.world._render import draw_simulator, draw_world, render_rgb
+from copi.world._render import draw_simulator, draw_world, rasterize, render_rgb
 from copi.world._sensor import RangeSensor
 from copi.world._simulator import Simulator, StepResult
 from copi.world._world import ObstacleSpec, World
@@ -49,6 +49,7 @@ __all__ = [
     "place_obstacles",
     "polygon_world",
     "random_world",
+    "rasterize",
     "render_rgb",
     "sample_start_goal",
     "sample_world",

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+from collections.abc import Sequence
 from typing import Any, SupportsFloat
 
 import gymnasium
@@ -11,6 +13,7 @@ from numpy.typing import NDArray
 
 from copi.errors import InvalidArgumentError
 from copi.world._generate import WorldParams, random_world
+from copi.world._io import load_worlds
 from copi.world._sensor import RangeSensor
 from copi.world._simulator import Simulator, StepResult
 from copi.world._world import ObstacleSpec, World
@@ -23,9 +26,12 @@ ObsType = NDArray[np.float32]
 class NavigationEnv(gymnasium.Env[ObsType, ObsType]):
     """Reach a goal in a random polygon world among random-walking discs (paper §IV).
 
-    Each ``reset`` draws a world of :func:`~copi.world.random_world` (or runs the one in
-    ``options["world"]``, a :class:`~copi.world.World` or its JSON dict), a start and goal
-    and the moving obstacles, all from ``self.np_random``.
+    Each ``reset`` draws a world of :func:`~copi.world.random_world`, a start and goal and
+    the moving obstacles, all from ``self.np_random``. To train or evaluate on given
+    worlds, fix them at construction (``world=`` or ``world_file=``): every reset,
+    including a vector environment's automatic ones, then draws among those worlds only.
+    ``reset(options={"world": w})`` runs ``w`` (a :class:`~copi.world.World` or its JSON
+    dict) for that one episode.
 
     Observation
         float32 vector of N + 2: the N ranges of the ring sensor (ray i at 2 pi i / N from
@@ -43,13 +49,23 @@ class NavigationEnv(gymnasium.Env[ObsType, ObsType]):
         At the goal (within ``goal_tolerance``); at a contact with a moving obstacle when
         ``terminate_on_collision`` (the default). Walls only stop the agent.
     Truncation
-        After ``max_steps`` steps.
+        After ``max_steps`` steps. ``gymnasium.make`` also wraps the environment in a
+        ``TimeLimit`` of ``spec.max_episode_steps`` (500, the default ``max_steps``;
+        ``gymnasium.make(id, max_episode_steps=n)`` changes it): the earlier limit
+        truncates.
     Info
         ``contact``, ``blocked``, ``min_gap``, ``distance``, ``is_success``, ``world``.
 
     Parameters
     ----------
     render_mode : {"rgb_array", None}
+        ``rgb_array``: ``render()`` returns the state as an image (walls, moving obstacles
+        and their traces, rays, the agent's path, the goal), drawn without Matplotlib
+        (about 1 ms a frame at 64 x 64).
+    world : World, dict or sequence of them, optional
+        The worlds episodes run in (one is drawn per reset); default: random worlds.
+    world_file : path, optional
+        A world file (:func:`~copi.world.load_worlds`) holding those worlds instead.
     obstacles : int, (int, int) or ObstacleSpec, optional
         Number of moving obstacles (or a range, or a full spec); the paper's 10-15 when None.
     n_rays, max_range : sensor ring (32 rays, range 10 by default).
@@ -63,7 +79,22 @@ class NavigationEnv(gymnasium.Env[ObsType, ObsType]):
         Bound of the goal part of the observation (1000 agent steps: beyond any world
         copi draws, and beyond a 512 x 512 Moving AI map).
     world_params : WorldParams, optional
-        The random world distribution.
+        The random world distribution (when no worlds are given).
+    width, height : int
+        Size of the rendered image in pixels (height defaults to width).
+
+    Examples
+    --------
+    >>> import gymnasium, copi
+    >>> from copi.world import World
+    >>> room = World([[0, 0], [30, 0], [30, 30], [0, 30]], name="room")
+    >>> env = gymnasium.make("copi/Navigation-v0", world=room, render_mode="rgb_array",
+    ...                      width=64)
+    >>> env.spec.max_episode_steps
+    500
+    >>> obs, info = env.reset(seed=0)
+    >>> info["world"], obs.shape, env.render().shape
+    ('room', (34,), (64, 64, 3))
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 10}
@@ -82,6 +113,10 @@ class NavigationEnv(gymnasium.Env[ObsType, ObsType]):
         min_distance: float = 10.0,
         world_params: WorldParams | None = None,
         goal_range: float = 1000.0,
+        world: World | dict[str, Any] | Sequence[World | dict[str, Any]] | None = None,
+        world_file: str | os.PathLike[str] | None = None,
+        width: int = 400,
+        height: int | None = None,
     ) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise InvalidArgumentError(
@@ -90,6 +125,21 @@ class NavigationEnv(gymnasium.Env[ObsType, ObsType]):
             )
         if int(max_steps) != max_steps or max_steps < 1:
             raise InvalidArgumentError(f"max_steps must be a positive int; got {max_steps!r}")
+        if world is not None and world_file is not None:
+            raise InvalidArgumentError("give world or world_file, not both")
+        self.worlds: tuple[World, ...] | None = None
+        if world_file is not None:
+            self.worlds = tuple(load_worlds(world_file))
+        elif world is not None:
+            items = [world] if isinstance(world, World | dict) else list(world)
+            if not items:
+                raise InvalidArgumentError("world must hold at least one world; got none")
+            self.worlds = tuple(_as_world(w, "world") for w in items)
+        for name, size in (("width", width), ("height", width if height is None else height)):
+            if int(size) != size or size < 1:
+                raise InvalidArgumentError(f"{name} must be a positive int; got {size!r}")
+        self.width = int(width)
+        self.height = int(width if height is None else height)
         self.render_mode = render_mode
         self.sensor = RangeSensor(n_rays, max_range)
         if obstacles is None or isinstance(obstacles, ObstacleSpec):
@@ -120,14 +170,14 @@ class NavigationEnv(gymnasium.Env[ObsType, ObsType]):
         world = options.pop("world", None)
         if options:
             raise InvalidArgumentError(f"unknown reset options {sorted(options)}; expected 'world'")
-        if world is None:
+        if world is not None:
+            world = _as_world(world, "options['world']")
+        elif self.worlds is None:
             world = random_world(self.np_random, params=self.world_params)
-        elif isinstance(world, dict):
-            world = World.from_dict(world)
-        elif not isinstance(world, World):
-            raise InvalidArgumentError(
-                f"options['world'] must be a World or its dict; got {type(world).__name__}"
-            )
+        elif len(self.worlds) == 1:
+            world = self.worlds[0]
+        else:
+            world = self.worlds[int(self.np_random.integers(len(self.worlds)))]
         self.sim = Simulator.from_world(
             world,
             self.np_random,
@@ -192,4 +242,12 @@ class NavigationEnv(gymnasium.Env[ObsType, ObsType]):
             raise gymnasium.error.ResetNeeded("call reset() before render()")
         from copi.world._render import render_rgb
 
-        return render_rgb(self.sim)
+        return render_rgb(self.sim, pixels=self.width, height=self.height)
+
+
+def _as_world(world: Any, what: str) -> World:
+    if isinstance(world, World):
+        return world
+    if isinstance(world, dict):
+        return World.from_dict(world)
+    raise InvalidArgumentError(f"{what} must be a World or its dict; got {type(world).__name__}")

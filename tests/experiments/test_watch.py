@@ -1,0 +1,62 @@
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from copi.errors import InvalidArgumentError
+from copi.experiments.watch import frames, save_watch, watch_episode
+from copi.learning import LearnParams, learn
+from copi.world import save_worlds
+from tests.common import U_TRAP
+
+
+@pytest.fixture(scope="module")
+def caps():  # type: ignore[no-untyped-def]
+    return learn(LearnParams(worlds=6, steps=150, seed=1))
+
+
+def test_copi_steps_are_explained(caps) -> None:  # type: ignore[no-untyped-def]
+    w = watch_episode("copi-faithful", caps, episode=1, max_steps=30)
+    assert len(w.steps) == w.outcome.steps and w.n_frames == w.outcome.steps + 1
+    first = w.steps[0].text
+    assert first.startswith("node ") and "template" in first and "policy" in first
+    assert w.steps[0].candidates.shape[1] == 2
+    pics = frames(w, size=200)
+    assert len(pics) == w.n_frames and pics[0].shape[1] == 200
+    assert not np.array_equal(pics[0], pics[-1])
+
+
+def test_baselines_say_their_name_and_the_gif_has_every_frame(tmp_path: Path) -> None:
+    worlds = tmp_path / "w.json"
+    save_worlds([U_TRAP], worlds)
+    w = watch_episode("straight", world_file=worlds, max_steps=12)
+    assert w.sim.world.name == "u-trap" and w.sensing == "map"
+    assert all(s.text.startswith("straight: ") for s in w.steps)
+    gif = save_watch(w, tmp_path / "ep.gif", size=160)
+    with Image.open(gif) as im:
+        assert im.n_frames == w.n_frames == w.outcome.steps + 1
+    png = save_watch(w, tmp_path / "last.png", size=160)
+    with Image.open(png) as im:
+        assert im.width == 160
+    assert watch_episode("replan", max_steps=3).sensing == "oracle"
+
+
+def test_bad_inputs(caps, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+    with pytest.raises(InvalidArgumentError, match="copi-faithful needs a capabilities file"):
+        watch_episode("copi-faithful")
+    with pytest.raises(InvalidArgumentError, match="method must be one of"):
+        watch_episode("astar")
+    w = watch_episode("straight", max_steps=2)
+    with pytest.raises(InvalidArgumentError, match=r"must end in \.gif, \.mp4, \.png; got 'x.avi'"):
+        save_watch(w, tmp_path / "x.avi")
+
+
+def test_mp4_without_ffmpeg_is_refused(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr("copi.experiments.watch.shutil.which", lambda _: None)
+    w = watch_episode("straight", max_steps=2)
+    with pytest.raises(InvalidArgumentError, match="writing .mp4 needs ffmpeg on the PATH"):
+        save_watch(w, tmp_path / "x.mp4")
+    assert not (tmp_path / "x.mp4").exists()

@@ -81,12 +81,9 @@ class _Explaining:
     def act(self, obs: Observation) -> NDArray[np.float64]:
         agent = self.agent
         if isinstance(agent, CopiAgent):
-            # CopiAgent.act, asking the controller to explain itself
-            desired, reach = agent.steering.aim(obs)
-            static = obs.static if agent.guard > 0 else None
-            action, d = agent.controller.decide(
-                obs.ranges, desired, reach=reach, static=static, explain=True
-            )
+            agent.explain = True
+            action = agent.act(obs)
+            d = agent.last_decision
             assert d is not None
             landmark = "a grown context" if d.landmark < 0 else f"landmark {d.landmark}"
             choice = {None: "none (no policy here)", "escape": "escape (none safe)"}.get(

@@ -30,7 +30,7 @@ from numpy.typing import NDArray
 
 from copi.errors import InvalidArgumentError
 from copi.learning import Capabilities
-from copi.online._controller import ContextController
+from copi.online._controller import ContextController, Decision
 from copi.online._mapping import Mapping
 from copi.online._strategies import Route
 from copi.world import World
@@ -170,6 +170,8 @@ class CopiAgent:
         See :class:`ContextController`.
     continual : bool
         Grow contexts for unfamiliar readings (see :class:`ContextController`).
+    explain : bool
+        Keep each step's :class:`Decision` in :attr:`last_decision` (slower).
     """
 
     sensing = "sensor"
@@ -181,11 +183,14 @@ class CopiAgent:
         name: str = "copi",
         guard: float = 0.0,
         continual: bool = False,
+        explain: bool = False,
     ) -> None:
         self.capabilities = capabilities
         self.name = name
         self.guard = guard
         self.continual = continual
+        self.explain = explain
+        self.last_decision: Decision | None = None
         self.steering = Steering()
         self.controller = ContextController(capabilities, guard=guard, continual=continual)
 
@@ -203,7 +208,9 @@ class CopiAgent:
     def act(self, obs: Observation) -> NDArray[np.float64]:
         desired, reach = self.steering.aim(obs)
         static = obs.static if self.guard > 0 else None
-        action, _ = self.controller.decide(obs.ranges, desired, reach=reach, static=static)
+        action, self.last_decision = self.controller.decide(
+            obs.ranges, desired, reach=reach, static=static, explain=self.explain
+        )
         return action
 
     def counters(self) -> dict[str, Any]:

@@ -134,6 +134,7 @@ def _cli(args: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str,
         (["--methods", "astar"], "method must be one of copi-faithful"),
         (["--methods", "replan@map"], "replan needs sensing level 'oracle' or above"),
         (["--methods", "dwa@psychic"], "sensing level must be one of sensor, map, oracle"),
+        (["--sensor-strategy", "astar"], "sensor strategy must be one of greedy, mapping"),
     ],
 )
 def test_benchmark_bad_input_writes_nothing(
@@ -163,3 +164,20 @@ def test_benchmark_without_navground(
     )  # fmt: skip
     assert code == 0, err
     assert "| straight | map |" in out and "| dwa | map |" in out
+
+
+def test_a_mapping_run_is_its_own_run(tmp_path: Path) -> None:
+    methods = tuple(parse_methods("compass-guard@sensor,compass-guard@map"))
+    greedy = BenchmarkConfig(methods=methods, families=("indoor",), episodes=2)
+    mapping = BenchmarkConfig(methods=methods, families=("indoor",), episodes=2,
+                              sensor_strategy="mapping")  # fmt: skip
+    assert greedy.run_id("indoor", "compass-guard", "sensor") != mapping.run_id(
+        "indoor", "compass-guard", "sensor"
+    )
+    # The map level follows the route either way: the same run.
+    assert greedy.run_id("indoor", "compass-guard", "map") == mapping.run_id(
+        "indoor", "compass-guard", "map"
+    )
+    run_benchmark(mapping, tmp_path / "m.sqlite")
+    text = write_benchmark_report(tmp_path / "m.sqlite", tmp_path / "rep").read_text()
+    assert "*mapping* (a map built from the ranges, re-planned)" in text

@@ -50,6 +50,12 @@ def evaluate_command(
             "--contact-continues", help="A contact does not end the episode (older behaviour)."
         ),
     ] = False,
+    sensor_strategy: Annotated[
+        str,
+        typer.Option(
+            "--sensor-strategy", help="Global strategy at level sensor: greedy or mapping."
+        ),
+    ] = "greedy",
 ) -> None:
     """Experiment 1 (paper §IV): reach goals in dynamic worlds never seen; each episode's
     path is compared with the optimum on the stationary snapshot. Rerunning the same
@@ -76,6 +82,7 @@ def evaluate_command(
         guard=guard,
         continual=continual,
         end_on_contact=not contact_continues,
+        sensor_strategy=sensor_strategy,
     )
     output.parent.mkdir(parents=True, exist_ok=True)
     run_id = _with_progress(
@@ -116,6 +123,12 @@ def benchmark_command(
     scheduler: Annotated[
         str | None, typer.Option("--scheduler", help="Dask scheduler tcp://HOST:PORT instead.")
     ] = None,
+    sensor_strategy: Annotated[
+        str,
+        typer.Option(
+            "--sensor-strategy", help="Global strategy at level sensor: greedy or mapping."
+        ),
+    ] = "greedy",
 ) -> None:
     """Every method at its sensing levels on the same episodes of every world family, into
     DIR/benchmark.sqlite (resumable), with DIR/benchmark.md: a table per family, paired
@@ -129,6 +142,7 @@ def benchmark_command(
     )
     from copi.experiments.benchmark_report import write_benchmark_report
     from copi.experiments.methods import method_spec, parse_methods
+    from copi.online import check_strategy
     from copi.world import check_family
 
     fams = BENCHMARK_FAMILIES if families is None else tuple(
@@ -136,6 +150,7 @@ def benchmark_command(
     )
     for f in fams:
         check_family(f)
+    check_strategy(sensor_strategy)
     chosen = parse_methods(methods)
     if methods is None and not navground_available():
         console.print(
@@ -161,8 +176,9 @@ def benchmark_command(
         caps = ensure_capabilities(output, presets, seed=seed)
         bar.update(task, completed=len(presets))
     config = BenchmarkConfig(
-        methods=tuple(chosen), families=tuple(fams), episodes=n, seed=seed, capabilities=caps
-    )
+        methods=tuple(chosen), families=tuple(fams), episodes=n, seed=seed, capabilities=caps,
+        sensor_strategy=sensor_strategy,
+    )  # fmt: skip
     results = output / "benchmark.sqlite"
     total = n * len(fams) * len(chosen)
     _with_progress(

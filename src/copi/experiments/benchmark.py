@@ -34,6 +34,7 @@ from copi.experiments.methods import (
 from copi.experiments.navigation import EpisodeResult, draw_episode, result_row
 from copi.geometry._arrays import positive_int
 from copi.learning import Capabilities
+from copi.online import check_strategy
 from copi.world import check_family
 
 __all__ = [
@@ -69,6 +70,9 @@ class BenchmarkConfig:
     """Reported episodes use this seed; parameters were tuned on other seeds."""
     end_on_contact: bool = True
     """A contact with a moving obstacle ends the episode (a collision)."""
+    sensor_strategy: str = "greedy"
+    """The global strategy of every method at level ``sensor``: "greedy" (head for the
+    goal) or "mapping" (map as it goes, :class:`copi.online.Mapping`)."""
     agent_radius: float = 0.3
     capabilities: dict[str, str] = field(default_factory=dict)
     """Capabilities file per preset ("faithful", "extended") for copi's methods."""
@@ -76,6 +80,7 @@ class BenchmarkConfig:
 
     def __post_init__(self) -> None:
         positive_int(self.episodes, "episodes")
+        check_strategy(self.sensor_strategy)
         if not self.families:
             raise InvalidArgumentError("families must name at least one family; got none")
         for f in self.families:
@@ -110,6 +115,8 @@ class BenchmarkConfig:
             "params": spec.params,
             "max_steps": "min(1000, ceil(3 optimal + 100))",
         }
+        if sensing == "sensor" and self.sensor_strategy != "greedy":
+            ident["strategy"] = self.sensor_strategy
         if spec.capabilities is not None:
             ident["capabilities_sha"] = self.capabilities_sha.get(spec.capabilities, "")
         return ident
@@ -141,8 +148,9 @@ def run_item(
         sim = copy.deepcopy(base)
         agent = make_agent(method, caps)
         res = run_agent(
-            agent, sim, sensing=level, max_steps=max_steps, end_on_contact=config.end_on_contact
-        )
+            agent, sim, sensing=level, max_steps=max_steps, end_on_contact=config.end_on_contact,
+            strategy=config.sensor_strategy,
+        )  # fmt: skip
         out.append(
             (run_id, method, result_row(sim, k, config.seed, optimal, res, family=family,
                                         sensing=level))

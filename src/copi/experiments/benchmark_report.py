@@ -195,6 +195,7 @@ def write_benchmark_report(
     out.mkdir(parents=True, exist_ok=True)
     groups: dict[str, dict[tuple[str, str], list[dict[str, Any]]]] = {}
     params: dict[str, Any] = {}
+    strategies: set[str] = set()
     with ResultsStore(results) as store:
         for run in store.runs():
             if run["experiment"] != "benchmark":
@@ -203,6 +204,8 @@ def write_benchmark_report(
             rows = store.episodes(run["run_id"])
             groups.setdefault(cfg["family"], {})[(cfg["method"], cfg["sensing"])] = rows
             params[cfg["method"]] = cfg.get("params", {})
+            if cfg["sensing"] == "sensor":
+                strategies.add(cfg.get("strategy", "greedy"))
     if not groups:
         raise FileNotFoundError(f"no benchmark runs in {results}")
     order = {m: i for i, m in enumerate(METHODS)}
@@ -227,7 +230,14 @@ def write_benchmark_report(
         f"higher than {REFERENCE}'s with an interval excluding zero. Steps to goal, "
         "clearance (the least surface distance to a moving obstacle over an episode, "
         "negative after a contact) and turning per step (the sum of turning angles between "
-        "moves over the steps) are medians; steps and turning over successful episodes.",
+        "moves over the steps) are medians; steps and turning over successful episodes. "
+        "At the `sensor` level every method's global strategy is "
+        + " / ".join(
+            {"greedy": "*greedy* (head for the goal)",
+             "mapping": "*mapping* (a map built from the ranges, re-planned)"}[k]
+            for k in sorted(strategies)
+        )
+        + "; at `map` and `oracle`, the static route.",
         "",
     ]
     for family in families:

@@ -18,7 +18,7 @@ from copi.experiments._runs import RunIdentity, run_into_store
 from copi.experiments.methods import make_agent, method_spec
 from copi.geometry._arrays import positive_int
 from copi.learning import Capabilities
-from copi.online import ContextController, check_sensing
+from copi.online import ContextController, check_sensing, check_strategy
 from copi.world import RangeSensor, Simulator, World, check_family, load_worlds, sample_world
 
 __all__ = [
@@ -49,6 +49,8 @@ class NavigationConfig(RunIdentity):
     """World family of the episodes (:data:`copi.world.FAMILIES`; "star": the paper's)."""
     sensing: str = "map"
     """Sensing level the method runs at (sensor, map or oracle; see copi.online)."""
+    sensor_strategy: str = "greedy"
+    """Global strategy at level sensor: "greedy" or "mapping" (see copi.online.Mapping)."""
     seed: int = 0
     """Episode k draws world, task and obstacles from default_rng([seed, k])."""
     max_steps: int = 1000
@@ -72,6 +74,7 @@ class NavigationConfig(RunIdentity):
             positive_int(getattr(self, name), name)
         spec = method_spec(self.method)
         check_sensing(self.sensing, spec.sensing, method=self.method)
+        check_strategy(self.sensor_strategy)
         if spec.capabilities is not None and self.capabilities is None:
             raise InvalidArgumentError(f"{self.method} needs a capabilities file")
         if self.world_file is None:
@@ -245,7 +248,7 @@ def run_episode(config: NavigationConfig, k: int) -> EpisodeResult:
     agent = make_agent(config.method, caps, **config.agent_params())
     out = run_agent(
         agent, sim, sensing=config.sensing, max_steps=config.max_steps,
-        end_on_contact=config.end_on_contact,
+        end_on_contact=config.end_on_contact, strategy=config.sensor_strategy,
     )  # fmt: skip
     return result_row(
         sim, k, config.seed, optimal, out, family=config.family, sensing=config.sensing

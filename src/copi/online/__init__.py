@@ -5,12 +5,14 @@ from __future__ import annotations
 
 from copi.online._agent import (
     SENSING_LEVELS,
+    SENSOR_STRATEGIES,
     Agent,
     CopiAgent,
     Observation,
     Steering,
     Task,
     check_sensing,
+    check_strategy,
 )
 from copi.online._controller import ContextController, Decision
 from copi.online._mapping import Mapping
@@ -27,8 +29,10 @@ __all__ = [
     "Observation",
     "Route",
     "SENSING_LEVELS",
+    "SENSOR_STRATEGIES",
     "Steering",
     "Task",
     "check_sensing",
+    "check_strategy",
     "make_strategy",
 ]

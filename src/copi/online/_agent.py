@@ -37,16 +37,31 @@ from copi.world import World
 
 __all__ = [
     "SENSING_LEVELS",
+    "SENSOR_STRATEGIES",
     "Agent",
     "CopiAgent",
     "Observation",
     "Steering",
     "Task",
     "check_sensing",
+    "check_strategy",
 ]
 
 SENSING_LEVELS = ("sensor", "map", "oracle")
 """The sensing levels, from least to most informed."""
+
+
+SENSOR_STRATEGIES = ("greedy", "mapping")
+"""Global strategies at level ``sensor`` (levels with a map follow the static route)."""
+
+
+def check_strategy(name: str) -> str:
+    """``name`` if it is a sensor-level strategy; otherwise one clear error."""
+    if name not in SENSOR_STRATEGIES:
+        raise InvalidArgumentError(
+            f"sensor strategy must be one of {', '.join(SENSOR_STRATEGIES)}; got {name!r}"
+        )
+    return name
 
 
 def check_sensing(level: str, needs: str | None = None, *, method: str = "method") -> int:
@@ -137,13 +152,9 @@ class Steering:
         if task.world is not None and task.start is not None and task.goal is not None:
             self.route = Route()
             self.route.reset(task.world, task.start, task.goal, task.agent_radius)
-        elif task.strategy == "mapping":
+        elif check_strategy(task.strategy) == "mapping":
             self.mapping = Mapping()
             self.mapping.reset(task.n_rays, task.max_range, task.agent_radius)
-        elif task.strategy != "greedy":
-            raise InvalidArgumentError(
-                f"strategy must be 'greedy' or 'mapping'; got {task.strategy!r}"
-            )
 
     def aim(self, obs: Observation) -> tuple[NDArray[np.float64], float]:
         """(desired direction, distance to the point aimed at)."""

@@ -85,7 +85,7 @@ def evaluate_command(
             config, output, workers=workers, scheduler=scheduler, progress=report
         ),
     )
-    with ResultsStore(output) as store:
+    with ResultsStore(output, readonly=True) as store:
         s = summarize(store.episodes(run_id))
     out.print(
         f"{output}: {method} ({sensing}): {s['episodes']} episodes, success "
@@ -221,7 +221,7 @@ def pursuit_command(
             config, output, workers=workers, scheduler=scheduler, progress=report
         ),
     )
-    with ResultsStore(output) as store:
+    with ResultsStore(output, readonly=True) as store:
         s = summarize_games(store.games(run_id))
     out.print(
         f"{output}: {config.method}: {s['games']} games, capture {100 * s['capture']:.1f} %, "

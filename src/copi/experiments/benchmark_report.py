@@ -188,7 +188,7 @@ def write_benchmark_report(
     out.mkdir(parents=True, exist_ok=True)
     groups: dict[str, dict[tuple[str, str], list[dict[str, Any]]]] = {}
     params: dict[str, Any] = {}
-    with ResultsStore(results) as store:
+    with ResultsStore(results, readonly=True) as store:
         for run in store.runs():
             if run["experiment"] != "benchmark":
                 continue

@@ -209,7 +209,7 @@ def write_report(results: list[str | os.PathLike[str]], directory: str | os.Path
     figures: list[Path] = []
     runs_info: list[str] = []
     for path in results:
-        with ResultsStore(path) as store:
+        with ResultsStore(path, readonly=True) as store:
             for run in store.runs():
                 if run["experiment"] != "navigation":
                     continue
@@ -236,7 +236,7 @@ def write_report(results: list[str | os.PathLike[str]], directory: str | os.Path
     games: list[dict[str, Any]] = []
     game_traj: dict[str, list[dict[str, Any]]] = {}
     for path in results:
-        with ResultsStore(path) as store:
+        with ResultsStore(path, readonly=True) as store:
             for run in store.runs():
                 if run["experiment"] != "pursuit":
                     continue

@@ -191,3 +191,28 @@ def test_a_world_file_is_run_episode_by_episode(caps_path: str, tmp_path: Path) 
     from copi.planning import length_error_bound
 
     assert rows[0]["optimal_length"] >= 13.0 / (1 + length_error_bound()) - 0.5 - 1e-9
+
+
+def test_a_changed_world_file_is_refused_under_resume(tmp_path: Path) -> None:
+    from copi.world import save_worlds
+    from tests.common import PILLARS, U_TRAP
+
+    worlds = tmp_path / "w.json"
+    save_worlds([U_TRAP], worlds)
+    out = tmp_path / "r.sqlite"
+    cfg = NavigationConfig(None, method="straight", worlds=3, world_file=str(worlds), max_steps=50)
+    evaluate(cfg, out)
+    with sqlite3.connect(out) as db:  # an interruption after the first episode
+        db.execute("DELETE FROM episodes WHERE episode >= 1")
+    before = out.read_bytes()
+    save_worlds([PILLARS], worlds)  # the file's content changes, its path does not
+    with pytest.raises(ResultsError, match="the world file's content changed"):
+        evaluate(cfg, out)
+    assert out.read_bytes() == before
+    # The same content at another path is the same run: it resumes.
+    save_worlds([U_TRAP], worlds)
+    moved = tmp_path / "moved.json"
+    moved.write_bytes(worlds.read_bytes())
+    evaluate(NavigationConfig(None, method="straight", worlds=3, world_file=str(moved),
+                              max_steps=50), out)  # fmt: skip
+    assert [r["world"] for r in _rows(out)] == ["u-trap"] * 3

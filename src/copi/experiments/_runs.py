@@ -16,26 +16,51 @@ from copi.learning import Capabilities
 __all__ = ["RunIdentity", "run_into_store"]
 
 
+def file_sha(path: str | os.PathLike[str]) -> str:
+    """The SHA-256 of a file's content (read in blocks)."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def code_version() -> str:
+    """The version of copi that computes a run's results (part of every run's identity:
+    results from another version are another run)."""
+    from copi import __version__
+
+    return __version__
+
+
 class RunIdentity:
     """For a frozen dataclass with ``capabilities`` (a path) and ``capabilities_sha``
-    fields: its identity is everything but the path, the file's content hash included."""
+    fields, and optionally ``world_file`` and ``world_file_sha``: its identity is
+    everything but the paths, the files' content hashes and copi's version included, so
+    that a changed input never resumes into results made from the old one."""
 
     capabilities: str | None
     capabilities_sha: str
 
     def resolved(self) -> Any:
-        """The config with the capabilities' content hash (checks the file loads)."""
-        if self.capabilities is None:
-            return self
-        Capabilities.load(self.capabilities)
-        with open(self.capabilities, "rb") as fh:
-            sha = hashlib.sha256(fh.read()).hexdigest()
-        return dataclasses.replace(self, capabilities_sha=sha)  # type: ignore[type-var]
+        """The config with its input files' content hashes (checks the capabilities
+        load)."""
+        changes: dict[str, str] = {}
+        if self.capabilities is not None:
+            Capabilities.load(self.capabilities)
+            changes["capabilities_sha"] = file_sha(self.capabilities)
+        world_file = getattr(self, "world_file", None)
+        if world_file is not None:
+            changes["world_file_sha"] = file_sha(world_file)
+        return dataclasses.replace(self, **changes)  # type: ignore[type-var]
 
     def identity(self) -> dict[str, Any]:
-        """What makes two runs the same run (the capabilities' path excluded)."""
+        """What makes two runs the same run (input paths excluded, their contents and
+        copi's version included)."""
         d = dataclasses.asdict(self)  # type: ignore[call-overload]
         d.pop("capabilities")
+        d.pop("world_file", None)
+        d["code"] = code_version()
         return d
 
     def run_id(self) -> str:

@@ -25,6 +25,7 @@ from typing import Any
 
 from copi.errors import InvalidArgumentError
 from copi.experiments._episode import optimal_to_goal, run_agent
+from copi.experiments._runs import code_version, file_sha
 from copi.experiments.methods import (
     CAPABILITY_PRESETS,
     make_agent,
@@ -92,8 +93,7 @@ class BenchmarkConfig:
         shas = {}
         for preset, path in self.capabilities.items():
             Capabilities.load(path)
-            with open(path, "rb") as fh:
-                shas[preset] = hashlib.sha256(fh.read()).hexdigest()
+            shas[preset] = file_sha(path)
         return dataclasses.replace(self, capabilities_sha=shas)
 
     def identity(self, family: str, method: str, sensing: str) -> dict[str, Any]:
@@ -109,6 +109,7 @@ class BenchmarkConfig:
             "agent_radius": self.agent_radius,
             "params": spec.params,
             "max_steps": "min(1000, ceil(3 optimal + 100))",
+            "code": code_version(),
         }
         if spec.capabilities is not None:
             ident["capabilities_sha"] = self.capabilities_sha.get(spec.capabilities, "")

@@ -12,9 +12,9 @@ from typing import Any
 
 import numpy as np
 
-from copi.errors import InvalidArgumentError
+from copi.errors import InvalidArgumentError, WorldFileError
 from copi.experiments._episode import EpisodeOutcome, optimal_to_goal, run_agent
-from copi.experiments._runs import RunIdentity, run_into_store
+from copi.experiments._runs import RunIdentity, file_sha, run_into_store
 from copi.experiments.methods import make_agent, method_spec
 from copi.geometry._arrays import positive_int
 from copi.learning import Capabilities
@@ -66,6 +66,8 @@ class NavigationConfig(RunIdentity):
     """Episodes (the first ones) whose trajectories are stored for figures."""
     capabilities_sha: str = field(default="", compare=False)
     """Content hash of the capabilities file (filled in by :meth:`resolved`)."""
+    world_file_sha: str = field(default="", compare=False)
+    """Content hash of the world file (filled in by :meth:`resolved`)."""
 
     def __post_init__(self) -> None:
         for name in ("worlds", "max_steps"):
@@ -144,7 +146,13 @@ def _capabilities(path: str, sha: str) -> Capabilities:
 
 
 @lru_cache(maxsize=4)
-def _world_list(path: str) -> tuple[World, ...]:
+def _world_list(path: str, sha: str = "") -> tuple[World, ...]:
+    """The worlds of ``path``, checked to be the content the run was started with."""
+    if sha and file_sha(path) != sha:
+        raise WorldFileError(
+            f"{path}: the world file changed during the run; rerun the same command to "
+            "be told how it differs from the stored run"
+        )
     return tuple(load_worlds(path))
 
 
@@ -154,6 +162,7 @@ def draw_episode(
     seed: int,
     *,
     world_file: str | None = None,
+    world_file_sha: str = "",
     agent_radius: float = 0.3,
     n_rays: int = 32,
     max_range: float = 10.0,
@@ -163,14 +172,12 @@ def draw_episode(
     for every method, so that methods can be compared episode by episode."""
     rng = np.random.default_rng([seed, k])
     if world_file is not None:
-        worlds = _world_list(world_file)
+        worlds = _world_list(world_file, world_file_sha)
         world = worlds[k % len(worlds)]
     else:
         world = sample_world(family, rng, name=f"{family}-{k:05d}")
     sensor = RangeSensor(n_rays, max_range)
-    return Simulator.from_world(
-        world, rng, agent_radius=agent_radius, sensor=sensor, record=record
-    )
+    return Simulator.from_world(world, rng, agent_radius=agent_radius, sensor=sensor, record=record)
 
 
 def result_row(
@@ -186,7 +193,8 @@ def result_row(
     """The stored row of one agent's episode (``sim`` after the episode)."""
     success = out.outcome == "success"
     excess = (
-        out.path_length / optimal - 1 if success and math.isfinite(optimal) and optimal > 0
+        out.path_length / optimal - 1
+        if success and math.isfinite(optimal) and optimal > 0
         else math.nan
     )
     trajectory = None
@@ -238,6 +246,7 @@ def run_episode(config: NavigationConfig, k: int) -> EpisodeResult:
         n_rays, max_range = caps.n_rays, float(caps.params.get("max_range", 10.0))
     sim = draw_episode(
         config.family, k, config.seed, world_file=config.world_file,
+        world_file_sha=config.world_file_sha,
         agent_radius=config.agent_radius, n_rays=n_rays, max_range=max_range,
         record=k < config.record,
     )  # fmt: skip

@@ -441,7 +441,7 @@ def _difference(
 ) -> str:
     """One line saying how a run's configuration differs from the one already stored."""
     diff = sorted(k for k in set(other) | set(config) if other.get(k) != config.get(k))
-    changed = [_INPUTS[k] for k in diff if k in _INPUTS]
+    changed = [_INPUTS[k] for k in diff if k in _INPUTS and other.get(k) and config.get(k)]
     if changed and len(changed) == len(diff):
         return (
             f"{path} holds a {experiment} run of method {method!r} made with other inputs: "

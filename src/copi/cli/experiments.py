@@ -263,22 +263,20 @@ def reproduce_command(
     Experiment 2 (200
     homicidal-chauffeur games, stationary and dynamic, capability and game evaders), and
     the report."""
+    from copi.experiments.benchmark import ensure_capabilities
     from copi.experiments.navigation import NavigationConfig, evaluate
     from copi.experiments.pursuit import PursuitConfig, pursue
     from copi.experiments.report import write_report
-    from copi.learning import LearnParams, learn
 
     output.mkdir(parents=True, exist_ok=True)
     episodes = 100 if quick else 1549
     results = output / "experiment1.sqlite"
-    modes = [("faithful", 4, 0.0), ("extended", 16, 1.2)]
+    modes = [("faithful", 0.0), ("extended", 1.2)]
     with progress() as bar:
-        for name, directions, guard in modes:
-            caps_path = output / f"capabilities-{name}.npz"
-            if not caps_path.exists():
-                bar_task = bar.add_task(f"learn ({name})", total=1)
-                learn(LearnParams(seed=seed, directions=directions)).save(caps_path)
-                bar.update(bar_task, completed=1)
+        for name, guard in modes:
+            bar_task = bar.add_task(f"learn ({name})", total=1)
+            caps_path = Path(ensure_capabilities(output, {name}, seed=seed)[name])
+            bar.update(bar_task, completed=1)
             eval_task = bar.add_task(f"evaluate ({name})", total=episodes)
 
             def advance(done: int, total: int, task: Any = eval_task) -> None:
@@ -304,12 +302,7 @@ def reproduce_command(
                 pursue(game_cfg, results, workers=workers, progress=advance_games)
         # The benchmark's quick version: every method on the same episodes of every family.
         from copi.baselines import navground_available
-        from copi.experiments.benchmark import (
-            BENCHMARK_FAMILIES,
-            BenchmarkConfig,
-            ensure_capabilities,
-            run_benchmark,
-        )
+        from copi.experiments.benchmark import BENCHMARK_FAMILIES, BenchmarkConfig, run_benchmark
         from copi.experiments.benchmark_report import write_benchmark_report
         from copi.experiments.methods import method_spec, parse_methods
 

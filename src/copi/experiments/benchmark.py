@@ -162,7 +162,12 @@ def ensure_capabilities(
     directory: str | os.PathLike[str], presets: set[str], *, seed: int = 0
 ) -> dict[str, str]:
     """The capabilities file of each preset in ``directory``, learnt (seed ``seed``) when
-    missing; returns {preset: path}."""
+    missing; returns {preset: path}.
+
+    A file already there is used only if it was learnt with exactly the parameters asked
+    for (the number of workers aside); otherwise it is refused, with the first parameter
+    that differs, and left as it is (results elsewhere may rest on it).
+    """
     from copi.learning import learn
 
     d = Path(directory)
@@ -170,11 +175,25 @@ def ensure_capabilities(
     paths = {}
     for preset in sorted(presets):
         path = d / f"capabilities-{preset}.npz"
-        if not path.exists():
-            params = dataclasses.replace(CAPABILITY_PRESETS[preset], seed=seed)
+        params = dataclasses.replace(CAPABILITY_PRESETS[preset], seed=seed)
+        if path.exists():
+            _check_learnt_with(path, dataclasses.asdict(params))
+        else:
             learn(params).save(path)
         paths[preset] = str(path)
     return paths
+
+
+def _check_learnt_with(path: Path, wanted: dict[str, Any]) -> None:
+    stored = Capabilities.load(path).params
+    for key in sorted(set(wanted) | set(stored)):
+        if key == "workers" or stored.get(key) == wanted.get(key):
+            continue
+        raise InvalidArgumentError(
+            f"{path} was learnt with {key}={stored.get(key, 'unset')!r}, not "
+            f"{wanted.get(key, 'unset')!r} as this run asks; use another output directory "
+            "(or move that file away to learn it anew)"
+        )
 
 
 def run_benchmark(

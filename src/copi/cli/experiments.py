@@ -87,8 +87,12 @@ def evaluate_command(
     )
     with ResultsStore(output, readonly=True) as store:
         s = summarize(store.episodes(run_id))
+    skipped = f", {s['skipped']} skipped (no valid task)" if s["skipped"] else ""
+    if not s["episodes"]:
+        out.print(f"{output}: {method} ({sensing}): no episode ran{skipped}")
+        return
     out.print(
-        f"{output}: {method} ({sensing}): {s['episodes']} episodes, success "
+        f"{output}: {method} ({sensing}): {s['episodes']} episodes{skipped}, success "
         f"{100 * s['success']:.1f} %, collision {100 * s['contact']:.1f} %, timeout "
         f"{100 * s['timeout']:.1f} %, median excess {100 * s['excess_median']:.1f} %, "
         f"{s['decisions_per_s']:,.0f} decisions/s"

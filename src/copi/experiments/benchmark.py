@@ -23,7 +23,7 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
-from copi.errors import InvalidArgumentError
+from copi.errors import InvalidArgumentError, InvalidWorldError
 from copi.experiments._episode import optimal_to_goal, run_agent
 from copi.experiments._runs import code_version, file_sha
 from copi.experiments.methods import (
@@ -32,7 +32,13 @@ from copi.experiments.methods import (
     method_spec,
     parse_methods,
 )
-from copi.experiments.navigation import EpisodeResult, draw_episode, result_row
+from copi.experiments.navigation import (
+    EpisodeResult,
+    draw_episode,
+    episode_world_name,
+    result_row,
+    skipped_row,
+)
 from copi.geometry._arrays import positive_int
 from copi.learning import Capabilities
 from copi.world import check_family
@@ -130,7 +136,14 @@ def run_item(
     config: BenchmarkConfig, family: str, k: int, todo: list[tuple[str, str, str]]
 ) -> list[tuple[str, str, EpisodeResult]]:
     """Episode k of ``family`` for each (run_id, method, level) in ``todo``."""
-    base = draw_episode(family, k, config.seed, agent_radius=config.agent_radius)
+    try:
+        base = draw_episode(family, k, config.seed, agent_radius=config.agent_radius)
+    except InvalidWorldError as exc:  # recorded, so that the run goes on
+        name = episode_world_name(family, k)
+        return [
+            (rid, m, skipped_row(k, config.seed, name, str(exc), family=family, sensing=level))
+            for rid, m, level in todo
+        ]
     optimal = optimal_to_goal(base.world, base)
     max_steps = benchmark_max_steps(optimal)
     out = []

@@ -193,7 +193,8 @@ def write_benchmark_report(
             if run["experiment"] != "benchmark":
                 continue
             cfg = run["config"]
-            rows = store.episodes(run["run_id"])
+            # skipped episodes (no valid task in the world) are the same for every method
+            rows = [r for r in store.episodes(run["run_id"]) if r["outcome"] != "skipped"]
             groups.setdefault(cfg["family"], {})[(cfg["method"], cfg["sensing"])] = rows
             params[cfg["method"]] = cfg.get("params", {})
     if not groups:

@@ -12,14 +12,22 @@ from typing import Any
 
 import numpy as np
 
-from copi.errors import InvalidArgumentError, WorldFileError
+from copi.errors import InvalidArgumentError, InvalidWorldError, WorldFileError
 from copi.experiments._episode import EpisodeOutcome, optimal_to_goal, run_agent
 from copi.experiments._runs import RunIdentity, file_sha, run_into_store
 from copi.experiments.methods import make_agent, method_spec
 from copi.geometry._arrays import positive_int
 from copi.learning import Capabilities
 from copi.online import ContextController, check_sensing
-from copi.world import RangeSensor, Simulator, World, check_family, load_worlds, sample_world
+from copi.world import (
+    RangeSensor,
+    Simulator,
+    World,
+    check_family,
+    check_task,
+    load_worlds,
+    sample_world,
+)
 
 __all__ = [
     "EpisodeResult",
@@ -125,7 +133,8 @@ class EpisodeResult:
     family: str = "star"
     sensing: str = "map"
     outcome: str = "timeout"
-    """success, collision or timeout (exclusive)."""
+    """success, collision or timeout (exclusive); "skipped" when the episode's world has
+    no valid task (then ``reason`` says why, and the episode counts in no rate)."""
     time_to_goal: float = math.nan
     """Steps to the goal on success."""
     min_clearance: float = math.nan
@@ -134,6 +143,32 @@ class EpisodeResult:
     """Sum of turning angles between consecutive moves, radians."""
     trajectory: dict[str, Any] | None = None
     """For recorded episodes: world, path, obstacle traces and radii (JSON-able)."""
+    reason: str | None = None
+    """Why an episode was skipped (None otherwise)."""
+
+
+def skipped_row(
+    k: int, seed: int, world: str, reason: str, *, family: str, sensing: str
+) -> EpisodeResult:
+    """The stored row of an episode whose world has no valid task: recorded as such, so
+    that a run goes on (and a resumed run does not stop there again)."""
+    nan = math.nan
+    return EpisodeResult(
+        episode=k, world=world, seed=seed, success=False, reached=False, collided=False,
+        timed_out=False, steps=0, contacts=0, path_length=nan, optimal_length=nan,
+        excess=nan, decision_us=nan, strategy_us=0.0, unfamiliar=0.0, no_policy=0,
+        family=family, sensing=sensing, outcome="skipped", reason=reason,
+    )  # fmt: skip
+
+
+def episode_world_name(
+    family: str, k: int, *, world_file: str | None = None, world_file_sha: str = ""
+) -> str:
+    """The name of episode k's world (as :func:`draw_episode` names it)."""
+    if world_file is not None:
+        worlds = _world_list(world_file, world_file_sha)
+        return worlds[k % len(worlds)].name
+    return f"{family}-{k:05d}"
 
 
 @lru_cache(maxsize=4)
@@ -244,12 +279,20 @@ def run_episode(config: NavigationConfig, k: int) -> EpisodeResult:
         assert config.capabilities is not None
         caps = _capabilities(config.capabilities, config.capabilities_sha)
         n_rays, max_range = caps.n_rays, float(caps.params.get("max_range", 10.0))
-    sim = draw_episode(
-        config.family, k, config.seed, world_file=config.world_file,
-        world_file_sha=config.world_file_sha,
-        agent_radius=config.agent_radius, n_rays=n_rays, max_range=max_range,
-        record=k < config.record,
-    )  # fmt: skip
+    try:
+        sim = draw_episode(
+            config.family, k, config.seed, world_file=config.world_file,
+            world_file_sha=config.world_file_sha,
+            agent_radius=config.agent_radius, n_rays=n_rays, max_range=max_range,
+            record=k < config.record,
+        )  # fmt: skip
+    except InvalidWorldError as exc:
+        name = episode_world_name(
+            config.family, k, world_file=config.world_file, world_file_sha=config.world_file_sha
+        )
+        return skipped_row(
+            k, config.seed, name, str(exc), family=config.family, sensing=config.sensing
+        )
     optimal = optimal_to_goal(sim.world, sim)
     agent = make_agent(config.method, caps, **config.agent_params())
     out = run_agent(
@@ -259,6 +302,16 @@ def run_episode(config: NavigationConfig, k: int) -> EpisodeResult:
     return result_row(
         sim, k, config.seed, optimal, out, family=config.family, sensing=config.sensing
     )
+
+
+def check_world_file(path: str | os.PathLike[str], *, agent_radius: float = 0.3) -> None:
+    """Refuse a world file any of whose worlds has no valid task, naming the file and the
+    world (before a run is registered)."""
+    for i, world in enumerate(load_worlds(path)):
+        try:
+            check_task(world, radius=agent_radius)
+        except InvalidWorldError as exc:
+            raise WorldFileError(f"{path}: world {i}: {exc}") from None
 
 
 def run_episodes(config: NavigationConfig, episodes: list[int]) -> list[EpisodeResult]:
@@ -281,6 +334,8 @@ def evaluate(
     committed at once.
     """
     config = config.resolved()
+    if config.world_file is not None:
+        check_world_file(config.world_file, agent_radius=config.agent_radius)
     return run_into_store(
         config,
         output,

@@ -62,6 +62,7 @@ CREATE TABLE IF NOT EXISTS episodes (
     time_to_goal REAL,
     min_clearance REAL,
     smoothness REAL,
+    reason TEXT,
     PRIMARY KEY (run_id, method, episode)
 );
 CREATE TABLE IF NOT EXISTS games (
@@ -100,14 +101,14 @@ EPISODE_COLUMNS = [
     "episode", "world", "seed", "success", "reached", "collided", "timed_out", "steps",
     "contacts", "path_length", "optimal_length", "excess", "decision_us", "strategy_us",
     "unfamiliar", "no_policy", "family", "sensing", "outcome", "time_to_goal",
-    "min_clearance", "smoothness",
+    "min_clearance", "smoothness", "reason",
 ]  # fmt: skip
 
 # Columns added after the first format, with their SQL types: older stores gain them
 # (NULL in their old rows) when opened for writing.
 _ADDED_EPISODE_COLUMNS = {
     "family": "TEXT", "sensing": "TEXT", "outcome": "TEXT", "time_to_goal": "REAL",
-    "min_clearance": "REAL", "smoothness": "REAL",
+    "min_clearance": "REAL", "smoothness": "REAL", "reason": "TEXT",
 }  # fmt: skip
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -9,6 +10,24 @@ import typer
 
 from copi.cli._common import _with_progress, app, console, out, progress
 from copi.errors import CopiError
+
+
+def _resuming(
+    report: Callable[[int, int], None], output: Path, unit: str
+) -> Callable[[int, int], None]:
+    """``report``, saying first, when a run resumes, how much of it was already done."""
+    first = True
+
+    def call(done: int, total: int) -> None:
+        nonlocal first
+        if first and 0 < done < total:
+            console.print(
+                f"copi: resuming: {done}/{total} {unit} already done in {output}", highlight=False
+            )
+        first = False
+        report(done, total)
+
+    return call
 
 
 @app.command("evaluate")
@@ -82,8 +101,9 @@ def evaluate_command(
         f"{method}: episodes",
         worlds,
         lambda report: evaluate(
-            config, output, workers=workers, scheduler=scheduler, progress=report
-        ),
+            config, output, workers=workers, scheduler=scheduler,
+            progress=_resuming(report, output, "episodes"),
+        ),  # fmt: skip
     )
     with ResultsStore(output, readonly=True) as store:
         s = summarize(store.episodes(run_id))
@@ -173,8 +193,9 @@ def benchmark_command(
         "benchmark: episodes",
         total,
         lambda report: run_benchmark(
-            config, results, workers=workers, scheduler=scheduler, progress=report
-        ),
+            config, results, workers=workers, scheduler=scheduler,
+            progress=_resuming(report, results, "episodes"),
+        ),  # fmt: skip
     )
     report = write_benchmark_report(results, output)
     out.print(report.read_text(encoding="utf-8").split("![")[0])
@@ -222,8 +243,9 @@ def pursuit_command(
         f"{config.method}: games",
         games,
         lambda report: pursue(
-            config, output, workers=workers, scheduler=scheduler, progress=report
-        ),
+            config, output, workers=workers, scheduler=scheduler,
+            progress=_resuming(report, output, "games"),
+        ),  # fmt: skip
     )
     with ResultsStore(output, readonly=True) as store:
         s = summarize_games(store.games(run_id))
@@ -290,7 +312,10 @@ def reproduce_command(
                 capabilities=str(caps_path), method=f"copi-{name}", worlds=episodes, seed=seed,
                 guard=guard,
             )
-            evaluate(config, results, workers=workers, progress=advance)
+            evaluate(
+                config, results, workers=workers,
+                progress=_resuming(advance, results, "episodes"),
+            )  # fmt: skip
         caps_path = output / "capabilities-extended.npz"
         for kind in ("capability", "game"):
             for dynamic in (False, True):
@@ -303,7 +328,10 @@ def reproduce_command(
                 def advance_games(done: int, total: int, task: Any = game_task) -> None:
                     bar.update(task, completed=done)
 
-                pursue(game_cfg, results, workers=workers, progress=advance_games)
+                pursue(
+                    game_cfg, results, workers=workers,
+                    progress=_resuming(advance_games, results, "games"),
+                )  # fmt: skip
         # The benchmark's quick version: every method on the same episodes of every family.
         from copi.baselines import navground_available
         from copi.experiments.benchmark import BENCHMARK_FAMILIES, BenchmarkConfig, run_benchmark
@@ -326,7 +354,11 @@ def reproduce_command(
         def advance_bench(done: int, total: int, task: Any = bench_task) -> None:
             bar.update(task, completed=done)
 
-        run_benchmark(bench, output / "benchmark.sqlite", workers=workers, progress=advance_bench)
+        bench_out = output / "benchmark.sqlite"
+        run_benchmark(
+            bench, bench_out, workers=workers,
+            progress=_resuming(advance_bench, bench_out, "episodes"),
+        )  # fmt: skip
     write_benchmark_report(output / "benchmark.sqlite", output)
     report = write_report([str(results)], output)
     text = report.read_text(encoding="utf-8")

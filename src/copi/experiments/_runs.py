@@ -7,13 +7,47 @@ import dataclasses
 import hashlib
 import json
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from concurrent.futures import as_completed
+from contextlib import contextmanager
 from typing import Any
 
+from copi.errors import Interrupted
 from copi.learning import Capabilities
 
-__all__ = ["RunIdentity", "run_into_store"]
+__all__ = ["RunIdentity", "run_into_store", "stops_cleanly"]
+
+
+class Tally:
+    """Items of a run stored so far, out of all (for the interruption message)."""
+
+    def __init__(self, finished: int, total: int) -> None:
+        self.finished = finished
+        self.total = total
+
+
+@contextmanager
+def stops_cleanly(tally: Tally, output: str | os.PathLike[str], unit: str) -> Iterator[None]:
+    """Turn Ctrl-C, wherever it lands (numba reports one that arrives inside a compiled
+    call as a SystemError), into :class:`copi.errors.Interrupted` saying what is saved."""
+    try:
+        yield
+    except (KeyboardInterrupt, SystemError) as exc:
+        if isinstance(exc, SystemError) and not _from_ctrl_c(exc):
+            raise
+        raise Interrupted(
+            f"{tally.finished}/{tally.total} {unit} saved in {output}; rerun the same command "
+            "to resume"
+        ) from None
+
+
+def _from_ctrl_c(exc: BaseException) -> bool:
+    seen = exc.__cause__ or exc.__context__
+    while seen is not None:
+        if isinstance(seen, KeyboardInterrupt):
+            return True
+        seen = seen.__cause__ or seen.__context__
+    return False
 
 
 def file_sha(path: str | os.PathLike[str]) -> str:
@@ -96,21 +130,20 @@ def run_into_store(
         store.begin(run_id, experiment, method, config.identity())
         add = store.add if table == "episodes" else store.add_game
         todo = [k for k in range(total) if k not in store.done(run_id, method, table)]
-        finished = total - len(todo)
+        tally = Tally(total - len(todo), total)
         if progress is not None:
-            progress(finished, total)
+            progress(tally.finished, total)
 
         def commit(results: list[Any]) -> None:
-            nonlocal finished
             for result in results:
                 add(run_id, experiment, method, result)
-                finished += 1
+                tally.finished += 1
             if progress is not None:
-                progress(finished, total)
+                progress(tally.finished, total)
 
         if not todo:
             return run_id
-        with make_executor(workers, scheduler) as pool:
+        with stops_cleanly(tally, output, table), make_executor(workers, scheduler) as pool:
             if isinstance(pool, InlineExecutor):
                 for k in todo:
                     commit([one(config, k)])

@@ -25,7 +25,7 @@ from typing import Any
 
 from copi.errors import InvalidArgumentError, InvalidWorldError
 from copi.experiments._episode import optimal_to_goal, run_agent
-from copi.experiments._runs import code_version, file_sha
+from copi.experiments._runs import Tally, code_version, file_sha, stops_cleanly
 from copi.experiments.methods import (
     CAPABILITY_PRESETS,
     make_agent,
@@ -239,21 +239,20 @@ def run_benchmark(
                     if k not in done:
                         missing.setdefault((family, k), []).append((rid, method, level))
         items = [(f, k, todo) for (f, k), todo in missing.items()]
-        finished = total - sum(len(t) for _, _, t in items)
+        tally = Tally(total - sum(len(t) for _, _, t in items), total)
         if progress is not None:
-            progress(finished, total)
+            progress(tally.finished, total)
 
         def commit(rows: list[tuple[str, str, EpisodeResult]]) -> None:
-            nonlocal finished
             for rid, method, result in rows:
                 store.add(rid, "benchmark", method, result)
-                finished += 1
+                tally.finished += 1
             if progress is not None:
-                progress(finished, total)
+                progress(tally.finished, total)
 
         if not items:
             return runs
-        with make_executor(workers, scheduler) as pool:
+        with stops_cleanly(tally, output, "episodes"), make_executor(workers, scheduler) as pool:
             if isinstance(pool, InlineExecutor):
                 for f, k, todo in items:
                     commit(run_item(config, f, k, todo))

@@ -193,3 +193,15 @@ def test_workers_die_with_a_killed_parent(tmp_path: Path) -> None:
     while time.time() < deadline and any(_alive(p) for p in pids):
         time.sleep(0.1)
     assert not any(_alive(p) for p in pids), "a worker outlived its killed parent"
+
+
+def test_movingai_maps_with_diagonally_touching_cells_import(tmp_path: Path, capsys) -> None:
+    data = Path(__file__).resolve().parents[3] / "shared" / "data" / "movingai" / "mapf"
+    if not (data / "random-32-32-20.map").is_file():
+        pytest.skip("shared/data is not beside the project")
+    out = tmp_path / "r.json"
+    code, text, err = run(
+        ["world", "import-movingai", str(data / "random-32-32-20.map"), "-o", str(out)], capsys
+    )
+    assert code == 0, err
+    assert "world 'random-32-32-20'" in text and out.exists()

@@ -63,6 +63,7 @@ def main(argv: list[str] | None = None) -> None:
     """Run the command line; bad input ends with one line on stderr and exit code 2."""
     try:
         _run(argv)
+        sys.exit(0)  # as click's standalone mode always did
     except _click.NoArgsIsHelpError as exc:
         console.print(exc.ctx.get_help() if exc.ctx else "", highlight=False, markup=False)
         sys.exit(2)

@@ -149,3 +149,10 @@ def test_every_entry_point_checks_shapes_and_values(small_caps, call) -> None:
     with pytest.raises(InvalidArgumentError):
         call(ctrl, np.full(caps.n_rays, 5.0))
     assert ctrl.n_decisions == 0
+
+
+@pytest.mark.parametrize("bad", [dict(threshold=math.nan), dict(threshold=-1.0),
+                                 dict(threshold="x"), dict(guard=math.nan), dict(guard=1j)])  # fmt: skip
+def test_bad_controller_parameters_are_refused(small_caps, bad) -> None:
+    with pytest.raises(InvalidArgumentError):
+        ContextController(small_caps[0], **bad)

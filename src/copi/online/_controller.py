@@ -98,9 +98,16 @@ class ContextController:
             threshold = stats.get("familiarity_threshold")
             if threshold is None:
                 threshold = 2.0 * float(stats.get("quantization_error", np.inf))
-        self.threshold = float(threshold)
+        try:
+            self.threshold = float(threshold)
+        except (TypeError, ValueError):
+            raise InvalidArgumentError(f"threshold must be a number; got {threshold!r}") from None
+        if not self.threshold >= 0:  # NaN too
+            raise InvalidArgumentError(
+                f"threshold must be >= 0 (inf: all familiar); got {threshold!r}"
+            )
         self.continual = bool(continual)
-        if not (math.isfinite(guard) and guard >= 0):
+        if not (isinstance(guard, int | float) and math.isfinite(guard) and guard >= 0):
             raise InvalidArgumentError(f"guard must be a finite number >= 0; got {guard!r}")
         self.guard = float(guard)
         angles = ring_angles(self.n_rays)

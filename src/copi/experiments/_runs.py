@@ -27,17 +27,29 @@ class Tally:
 
 
 @contextmanager
-def stops_cleanly(tally: Tally, output: str | os.PathLike[str], unit: str) -> Iterator[None]:
+def stops_cleanly(
+    tally: Tally,
+    output: str | os.PathLike[str],
+    unit: str,
+    saved: Callable[[], int] | None = None,
+) -> Iterator[None]:
     """Turn Ctrl-C, wherever it lands (numba reports one that arrives inside a compiled
-    call as a SystemError), into :class:`copi.errors.Interrupted` saying what is saved."""
+    call as a SystemError), into :class:`copi.errors.Interrupted` saying what is saved:
+    ``saved()`` counts it in the store (a Ctrl-C may land between a row's commit and
+    the tally), else the tally."""
     try:
         yield
     except (KeyboardInterrupt, SystemError) as exc:
         if isinstance(exc, SystemError) and not _from_ctrl_c(exc):
             raise
+        done = tally.finished
+        if saved is not None:
+            try:
+                done = saved()
+            except Exception:  # the count is a courtesy; the message must get out
+                pass
         raise Interrupted(
-            f"{tally.finished}/{tally.total} {unit} saved in {output}; rerun the same command "
-            "to resume"
+            f"{done}/{tally.total} {unit} saved in {output}; rerun the same command to resume"
         ) from None
 
 
@@ -143,7 +155,13 @@ def run_into_store(
 
         if not todo:
             return run_id
-        with stops_cleanly(tally, output, table), make_executor(workers, scheduler) as pool:
+        def saved() -> int:
+            return len(store.done(run_id, method, table))
+
+        with (
+            stops_cleanly(tally, output, table, saved),
+            make_executor(workers, scheduler) as pool,
+        ):
             if isinstance(pool, InlineExecutor):
                 for k in todo:
                     commit([one(config, k)])

@@ -252,7 +252,13 @@ def run_benchmark(
 
         if not items:
             return runs
-        with stops_cleanly(tally, output, "episodes"), make_executor(workers, scheduler) as pool:
+        def saved() -> int:
+            return sum(len(store.done(rid, m)) for (_, m, _), rid in runs.items())
+
+        with (
+            stops_cleanly(tally, output, "episodes", saved),
+            make_executor(workers, scheduler) as pool,
+        ):
             if isinstance(pool, InlineExecutor):
                 for f, k, todo in items:
                     commit(run_item(config, f, k, todo))

@@ -10,9 +10,9 @@ from __future__ import annotations
 __all__ = [
     "CapabilitiesFormatError",
     "CopiError",
+    "Interrupted",
     "InvalidArgumentError",
     "InvalidQueryError",
-    "Interrupted",
     "InvalidWorldError",
     "MapFileError",
     "NotFittedError",

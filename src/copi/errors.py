@@ -10,6 +10,7 @@ from __future__ import annotations
 __all__ = [
     "CapabilitiesFormatError",
     "CopiError",
+    "Interrupted",
     "InvalidArgumentError",
     "InvalidQueryError",
     "InvalidWorldError",
@@ -61,3 +62,9 @@ class CapabilitiesFormatError(CopiError, ValueError):
 
 class NotFittedError(CopiError, ValueError):
     """An estimator or controller was used before it was fitted or configured."""
+
+
+class Interrupted(KeyboardInterrupt):
+    """A run stopped by Ctrl-C (SIGINT), after committing what had finished; the message
+    says what is saved and how to resume. A KeyboardInterrupt, so that it stops callers
+    as Ctrl-C does."""

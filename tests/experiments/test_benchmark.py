@@ -181,3 +181,25 @@ def test_a_mapping_run_is_its_own_run(tmp_path: Path) -> None:
     run_benchmark(mapping, tmp_path / "m.sqlite")
     text = write_benchmark_report(tmp_path / "m.sqlite", tmp_path / "rep").read_text()
     assert "*mapping* (a map built from the ranges, re-planned)" in text
+
+
+def test_stale_capabilities_are_refused_not_reused(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A directory's capabilities learnt with seed 0 are not taken for a seed-1 run (as
+    `reproduce -o D --seed 1` and `benchmark` once did), and are left as they were."""
+    import copi.experiments.benchmark as bm
+    from copi.errors import InvalidArgumentError
+    from copi.learning import LearnParams
+
+    small = LearnParams(worlds=4, steps=80, directions=4)
+    monkeypatch.setitem(bm.CAPABILITY_PRESETS, "faithful", small)
+    path = Path(bm.ensure_capabilities(tmp_path, {"faithful"}, seed=0)["faithful"])
+    before = path.read_bytes()
+    assert bm.ensure_capabilities(tmp_path, {"faithful"}, seed=0)["faithful"] == str(path)
+    with pytest.raises(InvalidArgumentError, match="learnt with seed=0, not 1"):
+        bm.ensure_capabilities(tmp_path, {"faithful"}, seed=1)
+    monkeypatch.setitem(bm.CAPABILITY_PRESETS, "faithful", LearnParams(worlds=5, steps=80))
+    with pytest.raises(InvalidArgumentError, match="learnt with worlds=4, not 5"):
+        bm.ensure_capabilities(tmp_path, {"faithful"}, seed=0)
+    assert path.read_bytes() == before

@@ -191,3 +191,70 @@ def test_a_world_file_is_run_episode_by_episode(caps_path: str, tmp_path: Path) 
     from copi.planning import length_error_bound
 
     assert rows[0]["optimal_length"] >= 13.0 / (1 + length_error_bound()) - 0.5 - 1e-9
+
+
+def test_a_changed_world_file_is_refused_under_resume(tmp_path: Path) -> None:
+    from copi.world import save_worlds
+    from tests.common import PILLARS, U_TRAP
+
+    worlds = tmp_path / "w.json"
+    save_worlds([U_TRAP], worlds)
+    out = tmp_path / "r.sqlite"
+    cfg = NavigationConfig(None, method="straight", worlds=3, world_file=str(worlds), max_steps=50)
+    evaluate(cfg, out)
+    with sqlite3.connect(out) as db:  # an interruption after the first episode
+        db.execute("DELETE FROM episodes WHERE episode >= 1")
+    before = out.read_bytes()
+    save_worlds([PILLARS], worlds)  # the file's content changes, its path does not
+    with pytest.raises(ResultsError, match="the world file's content changed"):
+        evaluate(cfg, out)
+    assert out.read_bytes() == before
+    # The same content at another path is the same run: it resumes.
+    save_worlds([U_TRAP], worlds)
+    moved = tmp_path / "moved.json"
+    moved.write_bytes(worlds.read_bytes())
+    evaluate(NavigationConfig(None, method="straight", worlds=3, world_file=str(moved),
+                              max_steps=50), out)  # fmt: skip
+    assert [r["world"] for r in _rows(out)] == ["u-trap"] * 3
+
+
+def test_a_world_file_without_a_valid_task_is_refused_before_any_run(tmp_path: Path) -> None:
+    from copi.errors import WorldFileError
+    from copi.world import World, save_worlds
+    from tests.common import U_TRAP
+
+    worlds = tmp_path / "w.json"
+    box = World([[0, 0], [4, 0], [4, 4], [0, 4]], name="box")
+    save_worlds([U_TRAP, box], worlds)
+    out = tmp_path / "r.sqlite"
+    cfg = NavigationConfig(None, method="straight", worlds=2, world_file=str(worlds))
+    with pytest.raises(WorldFileError, match=r"w\.json: world 1: world 'box': no free start"):
+        evaluate(cfg, out)
+    assert not out.exists()
+
+
+def test_an_episode_without_a_valid_task_is_recorded_as_skipped(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import copi.experiments.navigation as nav
+    from copi.errors import InvalidWorldError
+    from copi.experiments.report import summarize
+
+    real = nav.draw_episode
+
+    def draw(family: str, k: int, *args, **kwargs):
+        if k == 1:
+            raise InvalidWorldError(f"world '{family}-{k:05d}': found no free start and goal")
+        return real(family, k, *args, **kwargs)
+
+    monkeypatch.setattr(nav, "draw_episode", draw)
+    out = tmp_path / "r.sqlite"
+    evaluate(NavigationConfig(None, method="straight", worlds=3, max_steps=30), out)
+    rows = _rows(out)
+    assert [r["outcome"] == "skipped" for r in rows] == [False, True, False]
+    assert rows[1]["world"] == "star-00001" and "no free start" in rows[1]["reason"]
+    with ResultsStore(out, readonly=True) as store:
+        s = summarize(store.episodes())
+    assert s["episodes"] == 2 and s["skipped"] == 1
+    evaluate(NavigationConfig(None, method="straight", worlds=3, max_steps=30), out)  # done
+    assert len(_rows(out)) == 3

@@ -161,3 +161,120 @@ def test_save_is_atomic(caps: Capabilities, tmp_path: Path) -> None:
     assert path.read_bytes() == before
     assert zipfile.is_zipfile(path)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["c.npz"]
+
+
+def _members(path: Path) -> dict[str, np.ndarray]:
+    with zipfile.ZipFile(path) as zf:
+        return {
+            n[: -len(".npy")]: np.lib.format.read_array(zf.open(n), allow_pickle=False)
+            for n in zf.namelist()
+        }
+
+
+def test_the_same_capabilities_give_the_same_bytes(tmp_path: Path) -> None:
+    """Learnt twice with one seed: byte-identical files (no timings, no zip timestamps),
+    so that a file's hash names its content."""
+    a = learn(SMALL).save(tmp_path / "a.npz")
+    b = learn(SMALL).save(tmp_path / "b.npz")
+    assert a.read_bytes() == b.read_bytes()
+    assert "seconds" not in json.dumps(Capabilities.load(a).stats)
+
+
+# Each tampering of a good file, and what the refusal names.
+TAMPERINGS = {
+    "nan node": ("nodes", lambda v: np.where(np.arange(v.size).reshape(v.shape) == 3, np.nan, v)),
+    "nan action": ("pol_actions", lambda v: np.full_like(v, np.nan)),
+    "negative template": ("red_template_of", lambda v: v - v.max() - 1),
+    "permutation out of range": ("group_perms", lambda v: v + 1),
+    "repeated index in a permutation": ("op_perms", lambda v: np.zeros_like(v)),
+    "zero group matrices": ("group_matrices", lambda v: np.zeros_like(v)),
+    "sheared operator": ("op_matrices", lambda v: v * 2.0),
+    "anchor out of range": ("lm_anchors", lambda v: v + 10_000),
+    "negative anchor": ("lm_anchors", lambda v: v - 10_000),
+    "policy offsets backwards": ("pol_path_start", lambda v: v[::-1].copy()),
+    "element out of range": ("red_element", lambda v: v + 100),
+    "inf landmark": ("lm_points", lambda v: np.full_like(v, np.inf)),
+    "merge out of range": ("lm_merges", lambda v: v + 10_000),
+    "wrong dtype": ("nodes", lambda v: v.astype("U8")),
+}
+
+
+def _rewrite(good: Path, path: Path, change: dict[str, np.ndarray]) -> Path:
+    arrays = _members(good)
+    arrays.update(change)
+    with open(path, "wb") as fh:
+        np.savez(fh, **arrays)
+    return path
+
+
+@pytest.mark.parametrize("case", sorted(TAMPERINGS))
+def test_a_tampered_file_is_refused_naming_it(caps: Capabilities, tmp_path: Path, case) -> None:
+    good = caps.save(tmp_path / "good.npz")
+    member, change = TAMPERINGS[case]
+    bad = _rewrite(good, tmp_path / "bad.npz", {member: change(_members(good)[member])})
+    with pytest.raises(CapabilitiesFormatError, match=r"bad\.npz: "):
+        Capabilities.load(bad)
+
+
+@settings(
+    max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(data=st.data())
+def test_random_tampering_is_refused_or_loads_consistently(
+    caps: Capabilities, tmp_path_factory: pytest.TempPathFactory, data
+) -> None:
+    """Any member replaced by random numbers of a random shape: a CapabilitiesFormatError,
+    or capabilities whose online chain runs (never another exception)."""
+    from copi.online import ContextController
+
+    d = tmp_path_factory.mktemp("tamper")
+    good = caps.save(d / "good.npz")
+    arrays = _members(good)
+    member = data.draw(st.sampled_from(sorted(k for k in arrays if k != "metadata")))
+    old = arrays[member]
+    shape = data.draw(st.sampled_from([old.shape, (), (0,), (3,), old.shape[:-1] or (2,)]))
+    values = st.floats(allow_nan=True, allow_infinity=True, width=64) | st.integers(-5, 40)
+    flat = data.draw(st.lists(values, min_size=0, max_size=8))
+    n = int(np.prod(shape))
+    filled = np.resize(np.array(flat or [0], dtype=np.float64), n).reshape(shape)
+    castable = np.isfinite(filled).all() and (np.abs(filled) < 1e6).all()
+    new = filled.astype(old.dtype) if old.dtype.kind in "iub" and castable else filled
+    bad = _rewrite(good, d / "bad.npz", {member: new})
+    try:
+        back = Capabilities.load(bad)
+    except CapabilitiesFormatError as exc:
+        assert str(bad) in str(exc) and "\n" not in str(exc)
+        return
+    ctrl = ContextController(back)
+    action, _ = ctrl.decide(np.full(back.n_rays, 5.0), [1.0, 0.0])
+    assert np.isfinite(action).all() and np.hypot(*action) <= 1 + 1e-9
+
+
+@settings(max_examples=40, deadline=None)
+@given(blob=st.binary(min_size=0, max_size=400))
+def test_random_bytes_are_refused_in_one_line(tmp_path_factory, blob: bytes) -> None:
+    path = tmp_path_factory.mktemp("bytes") / "caps.npz"
+    path.write_bytes(blob)
+    with pytest.raises(CapabilitiesFormatError) as info:
+        Capabilities.load(path)
+    assert str(path) in str(info.value) and "allow_pickle" not in str(info.value)
+
+
+def test_a_huge_extra_member_is_never_unpacked(caps: Capabilities, tmp_path: Path) -> None:
+    path = caps.save(tmp_path / "extra.npz")
+    with zipfile.ZipFile(path, "a", compression=zipfile.ZIP_DEFLATED) as zf:
+        # 64 MiB of zeros in ~64 KiB: read, it would be unpacked in full
+        with zf.open("bomb.npy", "w", force_zip64=True) as fh:
+            np.lib.format.write_array(fh, np.zeros(1 << 23))
+    assert Capabilities.load(path).equals(caps)
+    # A known member declaring more than the cap is refused before it is unpacked.
+    big = tmp_path / "big.npz"
+    members = _members(path)
+    members.pop("bomb")
+    members["nodes"] = np.zeros((1 << 25, 2))  # 256 MiB + header
+    with zipfile.ZipFile(big, "w", compression=zipfile.ZIP_DEFLATED) as zf:
+        for name, arr in members.items():
+            with zf.open(f"{name}.npy", "w", force_zip64=True) as fh:
+                np.lib.format.write_array(fh, arr)
+    with pytest.raises(CapabilitiesFormatError, match="member 'nodes' unpacks to"):
+        Capabilities.load(big)

@@ -117,3 +117,42 @@ def test_bad_readings_are_refused(small_caps) -> None:
         ctl.decide(np.r_[np.nan, np.ones(31)], [1.0, 0.0])
     with pytest.raises(InvalidArgumentError, match="guard must be"):
         ContextController(caps, guard=-1)
+
+
+@pytest.mark.parametrize(
+    "call",
+    [
+        # the two out-of-bounds reads of issue 14: a reach of one value for a batch, and a
+        # static reading of 3 rays with a guard
+        lambda c, s: c.decide_batch(np.tile(s, (200, 1)), np.ones((200, 2)), reach=[1.0, 2.0]),
+        lambda c, s: c.decide(s, [1.0, 0.0], static=[1, 2, 3]),
+        lambda c, s: c.decide_batch(np.tile(s, (3, 1)), np.ones((3, 2)), static=np.ones((2, 32))),
+        lambda c, s: c.decide_batch(np.tile(s, (3, 1)), np.ones(6)),
+        lambda c, s: c.decide(s, [1.0]),
+        lambda c, s: c.decide(s, [np.nan, 0.0]),
+        lambda c, s: c.decide(s, [1.0, 0.0], reach=np.nan),
+        lambda c, s: c.decide(s, [1.0, 0.0], reach=-1.0),
+        lambda c, s: c.decide(s, [1.0, 0.0], reach="far"),
+        lambda c, s: c.decide(-s, [1.0, 0.0]),
+        lambda c, s: c.decide(s + 1j, [1.0, 0.0]),
+        lambda c, s: c.decide(s, [1.0 + 2j, 0.0]),
+        lambda c, s: c.decide(s, [1.0, 0.0], static=np.full(32, np.nan)),
+        lambda c, s: c.decide(s, [1.0, 0.0], static=-s),
+        lambda c, s: c.decide(["a"] * 32, [1.0, 0.0]),
+        lambda c, s: c.decide_batch(np.tile(s, (2, 1)), np.ones((2, 2)), reach=[np.nan, 1.0]),
+        lambda c, s: c.decide_batch(np.tile(-s, (2, 1)), np.ones((2, 2))),
+    ],
+)
+def test_every_entry_point_checks_shapes_and_values(small_caps, call) -> None:
+    caps, _ = small_caps
+    ctrl = ContextController(caps, guard=1.0)
+    with pytest.raises(InvalidArgumentError):
+        call(ctrl, np.full(caps.n_rays, 5.0))
+    assert ctrl.n_decisions == 0
+
+
+@pytest.mark.parametrize("bad", [dict(threshold=math.nan), dict(threshold=-1.0),
+                                 dict(threshold="x"), dict(guard=math.nan), dict(guard=1j)])  # fmt: skip
+def test_bad_controller_parameters_are_refused(small_caps, bad) -> None:
+    with pytest.raises(InvalidArgumentError):
+        ContextController(small_caps[0], **bad)

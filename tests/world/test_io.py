@@ -111,3 +111,110 @@ def test_failed_save_leaves_the_old_file(tmp_path: Path) -> None:
     assert sorted(x.name for x in tmp_path.iterdir()) == ["w.json"]
     assert json.loads(before)[0]["name"] == "u-trap"
     assert np.allclose(load_worlds(p)[0].boundary, U_TRAP.boundary)
+
+
+# -- hostile and malformed files (issue 14) ------------------------------------------------
+
+_json = st.recursive(
+    st.none() | st.booleans() | st.floats(allow_nan=False) | st.integers() | st.text(max_size=5),
+    lambda children: st.lists(children, max_size=4)
+    | st.dictionaries(
+        st.sampled_from(["name", "boundary", "holes", "start", "goal", "obstacles", "count",
+                         "radius", "speed", "x"]),
+        children, max_size=5,
+    ),  # fmt: skip
+    max_leaves=20,
+)
+_coord = st.one_of(
+    st.floats(-50, 50),
+    st.integers(-50, 50),
+    st.just(10**400),
+    st.just(float("nan")),
+    st.just("1"),
+    st.just(None),
+)
+_ring = st.lists(st.lists(_coord, min_size=2, max_size=2), min_size=0, max_size=6)
+
+
+def _world_like() -> st.SearchStrategy[dict]:
+    return st.fixed_dictionaries(
+        {"boundary": _ring},
+        optional={
+            "name": st.text(max_size=4) | st.integers(),
+            "holes": st.lists(_ring, max_size=2),
+            "start": st.lists(_coord, max_size=3),
+            "goal": st.lists(_coord, max_size=3),
+            "obstacles": st.fixed_dictionaries(
+                {}, optional={"count": _coord, "radius": _coord, "speed": _coord}
+            ),
+        },
+    )
+
+
+def _check_loads_or_refuses(path, text: str) -> None:
+    path.write_text(text, encoding="utf-8")
+    try:
+        worlds = load_worlds(path)
+    except WorldFileError as exc:
+        assert str(exc).startswith(str(path)) and "\n" not in str(exc)
+        return
+    assert worlds and all(w.polygon.is_valid for w in worlds)
+
+
+@settings(max_examples=150, deadline=None)
+@given(value=_json)
+def test_any_json_loads_or_is_refused_in_one_line(tmp_path_factory, value) -> None:
+    _check_loads_or_refuses(tmp_path_factory.mktemp("j") / "w.json", json.dumps(value))
+
+
+@settings(max_examples=200, deadline=None)
+@given(worlds=st.lists(_world_like(), min_size=1, max_size=3) | _world_like())
+def test_world_like_files_load_or_are_refused_in_one_line(tmp_path_factory, worlds) -> None:
+    text = json.dumps(worlds, default=str)
+    _check_loads_or_refuses(tmp_path_factory.mktemp("w") / "w.json", text)
+
+
+@settings(max_examples=60, deadline=None)
+@given(blob=st.binary(max_size=200))
+def test_random_bytes_are_refused_in_one_line(tmp_path_factory, blob: bytes) -> None:
+    path = tmp_path_factory.mktemp("b") / "w.json"
+    path.write_bytes(blob)
+    try:
+        load_worlds(path)
+    except WorldFileError as exc:
+        assert str(exc).startswith(str(path)) and "\n" not in str(exc)
+
+
+def test_deep_nesting_huge_numbers_and_a_byte_order_mark(tmp_path) -> None:
+    deep = tmp_path / "deep.json"
+    deep.write_text("[" * 100_000 + "]" * 100_000)
+    with pytest.raises(WorldFileError, match="nested too deeply"):
+        load_worlds(deep)
+    big = tmp_path / "big.json"
+    big.write_text('{"boundary": [[0, 0], [1' + "0" * 400 + ', 0], [4, 4]]}')
+    with pytest.raises(WorldFileError, match="too large for a float"):
+        load_worlds(big)
+    bom = tmp_path / "bom.json"
+    bom.write_bytes(b"\xef\xbb\xbf" + b'{"name": "b", "boundary": [[0, 0], [20, 0], [20, 20]]}')
+    assert [w.name for w in load_worlds(bom)] == ["b"]
+
+
+def test_a_hole_sharing_an_edge_with_the_boundary_is_named(tmp_path) -> None:
+    path = tmp_path / "edge.json"
+    path.write_text(
+        '{"name": "c", "boundary": [[0, 0], [20, 0], [20, 20], [0, 20]],'
+        ' "holes": [[[0, 5], [5, 5], [5, 10], [0, 10]]]}'
+    )
+    with pytest.raises(WorldFileError, match="hole 0 shares an edge with the boundary"):
+        load_worlds(path)
+
+
+def test_world_files_are_bounded(tmp_path) -> None:
+    path = tmp_path / "many.json"
+    one = {"boundary": [[0, 0], [20, 0], [20, 20]]}
+    path.write_text(json.dumps([one] * 30))
+    with pytest.raises(WorldFileError, match="30 worlds, more than a world file may hold"):
+        load_worlds(path, max_worlds=20)
+    with pytest.raises(WorldFileError, match="bytes, more than a world file may hold"):
+        load_worlds(path, max_bytes=100)
+    assert len(load_worlds(path)) == 30

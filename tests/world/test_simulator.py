@@ -92,3 +92,12 @@ def test_sensor_sees_the_moving_obstacles() -> None:
     sensor = RangeSensor(4, 10.0)
     sim = Simulator(U_TRAP, [20, 15], [20, 28], [[23, 15]], [1.0], sensor=sensor, seed=0)
     assert sim.ranges.tolist() == [2.0, 10.0, 8.0, 8.0]
+
+
+@pytest.mark.parametrize("radius", [float("nan"), -1.0, 0.0, 1j, "big"])
+def test_a_bad_agent_radius_is_refused(radius) -> None:
+    from copi.errors import InvalidArgumentError
+    from copi.world import Simulator, World
+
+    with pytest.raises(InvalidArgumentError, match="agent_radius"):
+        Simulator.from_world(World([[0, 0], [30, 0], [30, 30], [0, 30]]), 0, agent_radius=radius)

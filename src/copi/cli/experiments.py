@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -9,6 +10,24 @@ import typer
 
 from copi.cli._common import _with_progress, app, console, out, progress
 from copi.errors import CopiError
+
+
+def _resuming(
+    report: Callable[[int, int], None], output: Path, unit: str
+) -> Callable[[int, int], None]:
+    """``report``, saying first, when a run resumes, how much of it was already done."""
+    first = True
+
+    def call(done: int, total: int) -> None:
+        nonlocal first
+        if first and 0 < done < total:
+            console.print(
+                f"copi: resuming: {done}/{total} {unit} already done in {output}", highlight=False
+            )
+        first = False
+        report(done, total)
+
+    return call
 
 
 @app.command("evaluate")
@@ -89,13 +108,18 @@ def evaluate_command(
         f"{method}: episodes",
         worlds,
         lambda report: evaluate(
-            config, output, workers=workers, scheduler=scheduler, progress=report
-        ),
+            config, output, workers=workers, scheduler=scheduler,
+            progress=_resuming(report, output, "episodes"),
+        ),  # fmt: skip
     )
-    with ResultsStore(output) as store:
+    with ResultsStore(output, readonly=True) as store:
         s = summarize(store.episodes(run_id))
+    skipped = f", {s['skipped']} skipped (no valid task)" if s["skipped"] else ""
+    if not s["episodes"]:
+        out.print(f"{output}: {method} ({sensing}): no episode ran{skipped}")
+        return
     out.print(
-        f"{output}: {method} ({sensing}): {s['episodes']} episodes, success "
+        f"{output}: {method} ({sensing}): {s['episodes']} episodes{skipped}, success "
         f"{100 * s['success']:.1f} %, collision {100 * s['contact']:.1f} %, timeout "
         f"{100 * s['timeout']:.1f} %, median excess {100 * s['excess_median']:.1f} %, "
         f"{s['decisions_per_s']:,.0f} decisions/s"
@@ -185,8 +209,9 @@ def benchmark_command(
         "benchmark: episodes",
         total,
         lambda report: run_benchmark(
-            config, results, workers=workers, scheduler=scheduler, progress=report
-        ),
+            config, results, workers=workers, scheduler=scheduler,
+            progress=_resuming(report, results, "episodes"),
+        ),  # fmt: skip
     )
     report = write_benchmark_report(results, output)
     out.print(report.read_text(encoding="utf-8").split("![")[0])
@@ -234,10 +259,11 @@ def pursuit_command(
         f"{config.method}: games",
         games,
         lambda report: pursue(
-            config, output, workers=workers, scheduler=scheduler, progress=report
-        ),
+            config, output, workers=workers, scheduler=scheduler,
+            progress=_resuming(report, output, "games"),
+        ),  # fmt: skip
     )
-    with ResultsStore(output) as store:
+    with ResultsStore(output, readonly=True) as store:
         s = summarize_games(store.games(run_id))
     out.print(
         f"{output}: {config.method}: {s['games']} games, capture {100 * s['capture']:.1f} %, "
@@ -279,22 +305,20 @@ def reproduce_command(
     Experiment 2 (200
     homicidal-chauffeur games, stationary and dynamic, capability and game evaders), and
     the report."""
+    from copi.experiments.benchmark import ensure_capabilities
     from copi.experiments.navigation import NavigationConfig, evaluate
     from copi.experiments.pursuit import PursuitConfig, pursue
     from copi.experiments.report import write_report
-    from copi.learning import LearnParams, learn
 
     output.mkdir(parents=True, exist_ok=True)
     episodes = 100 if quick else 1549
     results = output / "experiment1.sqlite"
-    modes = [("faithful", 4, 0.0), ("extended", 16, 1.2)]
+    modes = [("faithful", 0.0), ("extended", 1.2)]
     with progress() as bar:
-        for name, directions, guard in modes:
-            caps_path = output / f"capabilities-{name}.npz"
-            if not caps_path.exists():
-                bar_task = bar.add_task(f"learn ({name})", total=1)
-                learn(LearnParams(seed=seed, directions=directions)).save(caps_path)
-                bar.update(bar_task, completed=1)
+        for name, guard in modes:
+            bar_task = bar.add_task(f"learn ({name})", total=1)
+            caps_path = Path(ensure_capabilities(output, {name}, seed=seed)[name])
+            bar.update(bar_task, completed=1)
             eval_task = bar.add_task(f"evaluate ({name})", total=episodes)
 
             def advance(done: int, total: int, task: Any = eval_task) -> None:
@@ -304,7 +328,10 @@ def reproduce_command(
                 capabilities=str(caps_path), method=f"copi-{name}", worlds=episodes, seed=seed,
                 guard=guard,
             )
-            evaluate(config, results, workers=workers, progress=advance)
+            evaluate(
+                config, results, workers=workers,
+                progress=_resuming(advance, results, "episodes"),
+            )  # fmt: skip
         caps_path = output / "capabilities-extended.npz"
         for kind in ("capability", "game"):
             for dynamic in (False, True):
@@ -317,15 +344,13 @@ def reproduce_command(
                 def advance_games(done: int, total: int, task: Any = game_task) -> None:
                     bar.update(task, completed=done)
 
-                pursue(game_cfg, results, workers=workers, progress=advance_games)
+                pursue(
+                    game_cfg, results, workers=workers,
+                    progress=_resuming(advance_games, results, "games"),
+                )  # fmt: skip
         # The benchmark's quick version: every method on the same episodes of every family.
         from copi.baselines import navground_available
-        from copi.experiments.benchmark import (
-            BENCHMARK_FAMILIES,
-            BenchmarkConfig,
-            ensure_capabilities,
-            run_benchmark,
-        )
+        from copi.experiments.benchmark import BENCHMARK_FAMILIES, BenchmarkConfig, run_benchmark
         from copi.experiments.benchmark_report import write_benchmark_report
         from copi.experiments.methods import method_spec, parse_methods
 
@@ -345,7 +370,11 @@ def reproduce_command(
         def advance_bench(done: int, total: int, task: Any = bench_task) -> None:
             bar.update(task, completed=done)
 
-        run_benchmark(bench, output / "benchmark.sqlite", workers=workers, progress=advance_bench)
+        bench_out = output / "benchmark.sqlite"
+        run_benchmark(
+            bench, bench_out, workers=workers,
+            progress=_resuming(advance_bench, bench_out, "episodes"),
+        )  # fmt: skip
     write_benchmark_report(output / "benchmark.sqlite", output)
     report = write_report([str(results)], output)
     text = report.read_text(encoding="utf-8")

@@ -86,7 +86,9 @@ def _print_stages(stages: list[dict[str, object]]) -> None:
             for k, v in st.items()
             if k not in ("stage", "seconds")
         )
-        table.add_row(str(st["stage"]), result, f"{float(st['seconds']):.2f}")  # type: ignore[arg-type]
+        seconds = st.get("seconds")  # not stored in files: the same content, the same bytes
+        shown = f"{float(seconds):.2f}" if isinstance(seconds, int | float) else "-"
+        table.add_row(str(st["stage"]), result, shown)
     out.print(table)
 
 

@@ -1,14 +1,24 @@
 """Entry point of the ``copi`` command.
 
-Errors on bad input (a CopiError, or an OSError on a path the user gave) are printed as
-one line and exit with code 2, without a traceback; usage errors are typer's (also 2).
+Every error on bad input ends with one line on stderr (``copi: error: ...``) and exit
+code 2, without a traceback: copi's own errors (CopiError), an OSError on a path the user
+gave, SQLite's failures, input too deep or too large to parse, and the option parser's
+usage errors. Ctrl-C ends with one line saying what was saved, and exit code 130.
 Commands live in one module per group (``world``, ``learning``, ``experiments``).
 """
 
 from __future__ import annotations
 
 import importlib
+import sqlite3
 import sys
+
+import typer
+
+try:  # typer >= 0.20 carries its own copy of click
+    from typer._click import exceptions as _click
+except ImportError:  # pragma: no cover - older typer, on click itself
+    from click import exceptions as _click  # type: ignore[no-redef]
 
 from copi.cli._common import app, console
 from copi.errors import CopiError
@@ -18,20 +28,73 @@ for _group in ("world", "learning", "experiments", "watch"):
     importlib.import_module(f"copi.cli.{_group}")
 
 
+def _error(message: str) -> None:
+    line = " ".join(str(message).split())  # one line, whatever the message held
+    console.print(f"[red]copi: error:[/red] {line}", highlight=False, markup=True)
+    sys.exit(2)
+
+
+def _interrupted(exc: BaseException | None) -> None:
+    detail = str(exc) if exc is not None and str(exc) else ""
+    console.print(f"copi: interrupted{': ' + detail if detail else ''}", highlight=False)
+    sys.exit(130)
+
+
+def _ctrl_c_inside(exc: BaseException) -> KeyboardInterrupt | None:
+    """The KeyboardInterrupt behind ``exc`` (numba reports a Ctrl-C that lands inside a
+    compiled call as a SystemError), or None."""
+    seen: BaseException | None = exc
+    while seen is not None:
+        if isinstance(seen, KeyboardInterrupt):
+            return seen
+        seen = seen.__cause__ or seen.__context__
+    return None
+
+
+def _run(argv: list[str] | None) -> None:
+    """Parse and invoke without click's own handlers, so that every error comes here."""
+    command = typer.main.get_command(app)
+    args = sys.argv[1:] if argv is None else list(argv)
+    with command.make_context("copi", args) as ctx:
+        command.invoke(ctx)
+
+
 def main(argv: list[str] | None = None) -> None:
     """Run the command line; bad input ends with one line on stderr and exit code 2."""
     try:
-        app(args=argv, prog_name="copi")
+        _run(argv)
+        sys.exit(0)  # as click's standalone mode always did
+    except _click.NoArgsIsHelpError as exc:
+        console.print(exc.ctx.get_help() if exc.ctx else "", highlight=False, markup=False)
+        sys.exit(2)
+    except typer.Exit as exc:
+        sys.exit(exc.exit_code)
+    except typer.Abort as exc:
+        _interrupted(_ctrl_c_inside(exc))
+    except _click.ClickException as exc:  # usage errors: bad options, missing arguments
+        ctx = getattr(exc, "ctx", None)
+        where = f"{ctx.command_path}: " if ctx is not None else ""
+        _error(f"{where}{exc.format_message()}")
     except CopiError as exc:
-        console.print(f"[red]copi: error:[/red] {exc}", highlight=False, markup=True)
-        sys.exit(2)
+        _error(str(exc))
     except OSError as exc:
-        where = f" {exc.filename}" if exc.filename else ""
-        console.print(f"[red]copi: error:[/red]{where}: {exc.strerror or exc}", highlight=False)
-        sys.exit(2)
-    except KeyboardInterrupt:
-        console.print("copi: interrupted")
-        sys.exit(130)
+        where = f"{exc.filename}: " if exc.filename else ""
+        _error(f"{where}{exc.strerror or exc}")
+    except sqlite3.Error as exc:
+        _error(f"results file: {exc}")
+    except RecursionError:
+        _error("input nested too deeply to read")
+    except OverflowError as exc:
+        _error(f"a number is too large ({exc})")
+    except MemoryError:
+        _error("out of memory: the input is too large")
+    except KeyboardInterrupt as exc:
+        _interrupted(exc)
+    except SystemError as exc:
+        stop = _ctrl_c_inside(exc)
+        if stop is None:
+            raise
+        _interrupted(stop)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -7,35 +7,106 @@ import dataclasses
 import hashlib
 import json
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from concurrent.futures import as_completed
+from contextlib import contextmanager
 from typing import Any
 
+from copi.errors import Interrupted
 from copi.learning import Capabilities
 
-__all__ = ["RunIdentity", "run_into_store"]
+__all__ = ["RunIdentity", "run_into_store", "stops_cleanly"]
+
+
+class Tally:
+    """Items of a run stored so far, out of all (for the interruption message)."""
+
+    def __init__(self, finished: int, total: int) -> None:
+        self.finished = finished
+        self.total = total
+
+
+@contextmanager
+def stops_cleanly(
+    tally: Tally,
+    output: str | os.PathLike[str],
+    unit: str,
+    saved: Callable[[], int] | None = None,
+) -> Iterator[None]:
+    """Turn Ctrl-C, wherever it lands (numba reports one that arrives inside a compiled
+    call as a SystemError), into :class:`copi.errors.Interrupted` saying what is saved:
+    ``saved()`` counts it in the store (a Ctrl-C may land between a row's commit and
+    the tally), else the tally."""
+    try:
+        yield
+    except (KeyboardInterrupt, SystemError) as exc:
+        if isinstance(exc, SystemError) and not _from_ctrl_c(exc):
+            raise
+        done = tally.finished
+        if saved is not None:
+            try:
+                done = saved()
+            except Exception:  # the count is a courtesy; the message must get out
+                pass
+        raise Interrupted(
+            f"{done}/{tally.total} {unit} saved in {output}; rerun the same command to resume"
+        ) from None
+
+
+def _from_ctrl_c(exc: BaseException) -> bool:
+    seen = exc.__cause__ or exc.__context__
+    while seen is not None:
+        if isinstance(seen, KeyboardInterrupt):
+            return True
+        seen = seen.__cause__ or seen.__context__
+    return False
+
+
+def file_sha(path: str | os.PathLike[str]) -> str:
+    """The SHA-256 of a file's content (read in blocks)."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def code_version() -> str:
+    """The version of copi that computes a run's results (part of every run's identity:
+    results from another version are another run)."""
+    from copi import __version__
+
+    return __version__
 
 
 class RunIdentity:
     """For a frozen dataclass with ``capabilities`` (a path) and ``capabilities_sha``
-    fields: its identity is everything but the path, the file's content hash included."""
+    fields, and optionally ``world_file`` and ``world_file_sha``: its identity is
+    everything but the paths, the files' content hashes and copi's version included, so
+    that a changed input never resumes into results made from the old one."""
 
     capabilities: str | None
     capabilities_sha: str
 
     def resolved(self) -> Any:
-        """The config with the capabilities' content hash (checks the file loads)."""
-        if self.capabilities is None:
-            return self
-        Capabilities.load(self.capabilities)
-        with open(self.capabilities, "rb") as fh:
-            sha = hashlib.sha256(fh.read()).hexdigest()
-        return dataclasses.replace(self, capabilities_sha=sha)  # type: ignore[type-var]
+        """The config with its input files' content hashes (checks the capabilities
+        load)."""
+        changes: dict[str, str] = {}
+        if self.capabilities is not None:
+            Capabilities.load(self.capabilities)
+            changes["capabilities_sha"] = file_sha(self.capabilities)
+        world_file = getattr(self, "world_file", None)
+        if world_file is not None:
+            changes["world_file_sha"] = file_sha(world_file)
+        return dataclasses.replace(self, **changes)  # type: ignore[type-var]
 
     def identity(self) -> dict[str, Any]:
-        """What makes two runs the same run (the capabilities' path excluded)."""
+        """What makes two runs the same run (input paths excluded, their contents and
+        copi's version included)."""
         d = dataclasses.asdict(self)  # type: ignore[call-overload]
         d.pop("capabilities")
+        d.pop("world_file", None)
+        d["code"] = code_version()
         return d
 
     def run_id(self) -> str:
@@ -71,21 +142,26 @@ def run_into_store(
         store.begin(run_id, experiment, method, config.identity())
         add = store.add if table == "episodes" else store.add_game
         todo = [k for k in range(total) if k not in store.done(run_id, method, table)]
-        finished = total - len(todo)
+        tally = Tally(total - len(todo), total)
         if progress is not None:
-            progress(finished, total)
+            progress(tally.finished, total)
 
         def commit(results: list[Any]) -> None:
-            nonlocal finished
             for result in results:
                 add(run_id, experiment, method, result)
-                finished += 1
+                tally.finished += 1
             if progress is not None:
-                progress(finished, total)
+                progress(tally.finished, total)
 
         if not todo:
             return run_id
-        with make_executor(workers, scheduler) as pool:
+        def saved() -> int:
+            return len(store.done(run_id, method, table))
+
+        with (
+            stops_cleanly(tally, output, table, saved),
+            make_executor(workers, scheduler) as pool,
+        ):
             if isinstance(pool, InlineExecutor):
                 for k in todo:
                     commit([one(config, k)])

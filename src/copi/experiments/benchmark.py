@@ -23,15 +23,22 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
-from copi.errors import InvalidArgumentError
+from copi.errors import InvalidArgumentError, InvalidWorldError
 from copi.experiments._episode import optimal_to_goal, run_agent
+from copi.experiments._runs import Tally, code_version, file_sha, stops_cleanly
 from copi.experiments.methods import (
     CAPABILITY_PRESETS,
     make_agent,
     method_spec,
     parse_methods,
 )
-from copi.experiments.navigation import EpisodeResult, draw_episode, result_row
+from copi.experiments.navigation import (
+    EpisodeResult,
+    draw_episode,
+    episode_world_name,
+    result_row,
+    skipped_row,
+)
 from copi.geometry._arrays import positive_int
 from copi.learning import Capabilities
 from copi.online import check_strategy
@@ -97,8 +104,7 @@ class BenchmarkConfig:
         shas = {}
         for preset, path in self.capabilities.items():
             Capabilities.load(path)
-            with open(path, "rb") as fh:
-                shas[preset] = hashlib.sha256(fh.read()).hexdigest()
+            shas[preset] = file_sha(path)
         return dataclasses.replace(self, capabilities_sha=shas)
 
     def identity(self, family: str, method: str, sensing: str) -> dict[str, Any]:
@@ -114,6 +120,7 @@ class BenchmarkConfig:
             "agent_radius": self.agent_radius,
             "params": spec.params,
             "max_steps": "min(1000, ceil(3 optimal + 100))",
+            "code": code_version(),
         }
         if sensing == "sensor" and self.sensor_strategy != "greedy":
             ident["strategy"] = self.sensor_strategy
@@ -136,7 +143,14 @@ def run_item(
     config: BenchmarkConfig, family: str, k: int, todo: list[tuple[str, str, str]]
 ) -> list[tuple[str, str, EpisodeResult]]:
     """Episode k of ``family`` for each (run_id, method, level) in ``todo``."""
-    base = draw_episode(family, k, config.seed, agent_radius=config.agent_radius)
+    try:
+        base = draw_episode(family, k, config.seed, agent_radius=config.agent_radius)
+    except InvalidWorldError as exc:  # recorded, so that the run goes on
+        name = episode_world_name(family, k)
+        return [
+            (rid, m, skipped_row(k, config.seed, name, str(exc), family=family, sensing=level))
+            for rid, m, level in todo
+        ]
     optimal = optimal_to_goal(base.world, base)
     max_steps = benchmark_max_steps(optimal)
     out = []
@@ -169,7 +183,12 @@ def ensure_capabilities(
     directory: str | os.PathLike[str], presets: set[str], *, seed: int = 0
 ) -> dict[str, str]:
     """The capabilities file of each preset in ``directory``, learnt (seed ``seed``) when
-    missing; returns {preset: path}."""
+    missing; returns {preset: path}.
+
+    A file already there is used only if it was learnt with exactly the parameters asked
+    for (the number of workers aside); otherwise it is refused, with the first parameter
+    that differs, and left as it is (results elsewhere may rest on it).
+    """
     from copi.learning import learn
 
     d = Path(directory)
@@ -177,11 +196,25 @@ def ensure_capabilities(
     paths = {}
     for preset in sorted(presets):
         path = d / f"capabilities-{preset}.npz"
-        if not path.exists():
-            params = dataclasses.replace(CAPABILITY_PRESETS[preset], seed=seed)
+        params = dataclasses.replace(CAPABILITY_PRESETS[preset], seed=seed)
+        if path.exists():
+            _check_learnt_with(path, dataclasses.asdict(params))
+        else:
             learn(params).save(path)
         paths[preset] = str(path)
     return paths
+
+
+def _check_learnt_with(path: Path, wanted: dict[str, Any]) -> None:
+    stored = Capabilities.load(path).params
+    for key in sorted(set(wanted) | set(stored)):
+        if key == "workers" or stored.get(key) == wanted.get(key):
+            continue
+        raise InvalidArgumentError(
+            f"{path} was learnt with {key}={stored.get(key, 'unset')!r}, not "
+            f"{wanted.get(key, 'unset')!r} as this run asks; use another output directory "
+            "(or move that file away to learn it anew)"
+        )
 
 
 def run_benchmark(
@@ -214,21 +247,26 @@ def run_benchmark(
                     if k not in done:
                         missing.setdefault((family, k), []).append((rid, method, level))
         items = [(f, k, todo) for (f, k), todo in missing.items()]
-        finished = total - sum(len(t) for _, _, t in items)
+        tally = Tally(total - sum(len(t) for _, _, t in items), total)
         if progress is not None:
-            progress(finished, total)
+            progress(tally.finished, total)
 
         def commit(rows: list[tuple[str, str, EpisodeResult]]) -> None:
-            nonlocal finished
             for rid, method, result in rows:
                 store.add(rid, "benchmark", method, result)
-                finished += 1
+                tally.finished += 1
             if progress is not None:
-                progress(finished, total)
+                progress(tally.finished, total)
 
         if not items:
             return runs
-        with make_executor(workers, scheduler) as pool:
+        def saved() -> int:
+            return sum(len(store.done(rid, m)) for (_, m, _), rid in runs.items())
+
+        with (
+            stops_cleanly(tally, output, "episodes", saved),
+            make_executor(workers, scheduler) as pool,
+        ):
             if isinstance(pool, InlineExecutor):
                 for f, k, todo in items:
                     commit(run_item(config, f, k, todo))

@@ -196,12 +196,13 @@ def write_benchmark_report(
     groups: dict[str, dict[tuple[str, str], list[dict[str, Any]]]] = {}
     params: dict[str, Any] = {}
     strategies: set[str] = set()
-    with ResultsStore(results) as store:
+    with ResultsStore(results, readonly=True) as store:
         for run in store.runs():
             if run["experiment"] != "benchmark":
                 continue
             cfg = run["config"]
-            rows = store.episodes(run["run_id"])
+            # skipped episodes (no valid task in the world) are the same for every method
+            rows = [r for r in store.episodes(run["run_id"]) if r["outcome"] != "skipped"]
             groups.setdefault(cfg["family"], {})[(cfg["method"], cfg["sensing"])] = rows
             params[cfg["method"]] = cfg.get("params", {})
             if cfg["sensing"] == "sensor":

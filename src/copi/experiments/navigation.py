@@ -12,14 +12,22 @@ from typing import Any
 
 import numpy as np
 
-from copi.errors import InvalidArgumentError
+from copi.errors import InvalidArgumentError, InvalidWorldError, WorldFileError
 from copi.experiments._episode import EpisodeOutcome, optimal_to_goal, run_agent
-from copi.experiments._runs import RunIdentity, run_into_store
+from copi.experiments._runs import RunIdentity, file_sha, run_into_store
 from copi.experiments.methods import make_agent, method_spec
 from copi.geometry._arrays import positive_int
 from copi.learning import Capabilities
 from copi.online import ContextController, check_sensing, check_strategy
-from copi.world import RangeSensor, Simulator, World, check_family, load_worlds, sample_world
+from copi.world import (
+    RangeSensor,
+    Simulator,
+    World,
+    check_family,
+    check_task,
+    load_worlds,
+    sample_world,
+)
 
 __all__ = [
     "EpisodeResult",
@@ -68,6 +76,8 @@ class NavigationConfig(RunIdentity):
     """Episodes (the first ones) whose trajectories are stored for figures."""
     capabilities_sha: str = field(default="", compare=False)
     """Content hash of the capabilities file (filled in by :meth:`resolved`)."""
+    world_file_sha: str = field(default="", compare=False)
+    """Content hash of the world file (filled in by :meth:`resolved`)."""
 
     def __post_init__(self) -> None:
         for name in ("worlds", "max_steps"):
@@ -126,7 +136,8 @@ class EpisodeResult:
     family: str = "star"
     sensing: str = "map"
     outcome: str = "timeout"
-    """success, collision or timeout (exclusive)."""
+    """success, collision or timeout (exclusive); "skipped" when the episode's world has
+    no valid task (then ``reason`` says why, and the episode counts in no rate)."""
     time_to_goal: float = math.nan
     """Steps to the goal on success."""
     min_clearance: float = math.nan
@@ -135,6 +146,32 @@ class EpisodeResult:
     """Sum of turning angles between consecutive moves, radians."""
     trajectory: dict[str, Any] | None = None
     """For recorded episodes: world, path, obstacle traces and radii (JSON-able)."""
+    reason: str | None = None
+    """Why an episode was skipped (None otherwise)."""
+
+
+def skipped_row(
+    k: int, seed: int, world: str, reason: str, *, family: str, sensing: str
+) -> EpisodeResult:
+    """The stored row of an episode whose world has no valid task: recorded as such, so
+    that a run goes on (and a resumed run does not stop there again)."""
+    nan = math.nan
+    return EpisodeResult(
+        episode=k, world=world, seed=seed, success=False, reached=False, collided=False,
+        timed_out=False, steps=0, contacts=0, path_length=nan, optimal_length=nan,
+        excess=nan, decision_us=nan, strategy_us=0.0, unfamiliar=0.0, no_policy=0,
+        family=family, sensing=sensing, outcome="skipped", reason=reason,
+    )  # fmt: skip
+
+
+def episode_world_name(
+    family: str, k: int, *, world_file: str | None = None, world_file_sha: str = ""
+) -> str:
+    """The name of episode k's world (as :func:`draw_episode` names it)."""
+    if world_file is not None:
+        worlds = _world_list(world_file, world_file_sha)
+        return worlds[k % len(worlds)].name
+    return f"{family}-{k:05d}"
 
 
 @lru_cache(maxsize=4)
@@ -147,7 +184,13 @@ def _capabilities(path: str, sha: str) -> Capabilities:
 
 
 @lru_cache(maxsize=4)
-def _world_list(path: str) -> tuple[World, ...]:
+def _world_list(path: str, sha: str = "") -> tuple[World, ...]:
+    """The worlds of ``path``, checked to be the content the run was started with."""
+    if sha and file_sha(path) != sha:
+        raise WorldFileError(
+            f"{path}: the world file changed during the run; rerun the same command to "
+            "be told how it differs from the stored run"
+        )
     return tuple(load_worlds(path))
 
 
@@ -157,6 +200,7 @@ def draw_episode(
     seed: int,
     *,
     world_file: str | None = None,
+    world_file_sha: str = "",
     agent_radius: float = 0.3,
     n_rays: int = 32,
     max_range: float = 10.0,
@@ -166,14 +210,12 @@ def draw_episode(
     for every method, so that methods can be compared episode by episode."""
     rng = np.random.default_rng([seed, k])
     if world_file is not None:
-        worlds = _world_list(world_file)
+        worlds = _world_list(world_file, world_file_sha)
         world = worlds[k % len(worlds)]
     else:
         world = sample_world(family, rng, name=f"{family}-{k:05d}")
     sensor = RangeSensor(n_rays, max_range)
-    return Simulator.from_world(
-        world, rng, agent_radius=agent_radius, sensor=sensor, record=record
-    )
+    return Simulator.from_world(world, rng, agent_radius=agent_radius, sensor=sensor, record=record)
 
 
 def result_row(
@@ -189,7 +231,8 @@ def result_row(
     """The stored row of one agent's episode (``sim`` after the episode)."""
     success = out.outcome == "success"
     excess = (
-        out.path_length / optimal - 1 if success and math.isfinite(optimal) and optimal > 0
+        out.path_length / optimal - 1
+        if success and math.isfinite(optimal) and optimal > 0
         else math.nan
     )
     trajectory = None
@@ -239,11 +282,20 @@ def run_episode(config: NavigationConfig, k: int) -> EpisodeResult:
         assert config.capabilities is not None
         caps = _capabilities(config.capabilities, config.capabilities_sha)
         n_rays, max_range = caps.n_rays, float(caps.params.get("max_range", 10.0))
-    sim = draw_episode(
-        config.family, k, config.seed, world_file=config.world_file,
-        agent_radius=config.agent_radius, n_rays=n_rays, max_range=max_range,
-        record=k < config.record,
-    )  # fmt: skip
+    try:
+        sim = draw_episode(
+            config.family, k, config.seed, world_file=config.world_file,
+            world_file_sha=config.world_file_sha,
+            agent_radius=config.agent_radius, n_rays=n_rays, max_range=max_range,
+            record=k < config.record,
+        )  # fmt: skip
+    except InvalidWorldError as exc:
+        name = episode_world_name(
+            config.family, k, world_file=config.world_file, world_file_sha=config.world_file_sha
+        )
+        return skipped_row(
+            k, config.seed, name, str(exc), family=config.family, sensing=config.sensing
+        )
     optimal = optimal_to_goal(sim.world, sim)
     agent = make_agent(config.method, caps, **config.agent_params())
     out = run_agent(
@@ -253,6 +305,16 @@ def run_episode(config: NavigationConfig, k: int) -> EpisodeResult:
     return result_row(
         sim, k, config.seed, optimal, out, family=config.family, sensing=config.sensing
     )
+
+
+def check_world_file(path: str | os.PathLike[str], *, agent_radius: float = 0.3) -> None:
+    """Refuse a world file any of whose worlds has no valid task, naming the file and the
+    world (before a run is registered)."""
+    for i, world in enumerate(load_worlds(path)):
+        try:
+            check_task(world, radius=agent_radius)
+        except InvalidWorldError as exc:
+            raise WorldFileError(f"{path}: world {i}: {exc}") from None
 
 
 def run_episodes(config: NavigationConfig, episodes: list[int]) -> list[EpisodeResult]:
@@ -275,6 +337,8 @@ def evaluate(
     committed at once.
     """
     config = config.resolved()
+    if config.world_file is not None:
+        check_world_file(config.world_file, agent_radius=config.agent_radius)
     return run_into_store(
         config,
         output,

@@ -33,10 +33,13 @@ SUMMARY_COLUMNS = [
 
 def summarize(rows: list[dict[str, Any]]) -> dict[str, Any]:
     """Summary of one method's episodes. Excess statistics are over successful episodes
-    (reached, no contact), as in the paper."""
+    (reached, no contact), as in the paper. Skipped episodes (no valid task in their
+    world) count in no rate; ``skipped`` says how many there were."""
+    skipped = sum(r.get("outcome") == "skipped" for r in rows)
+    rows = [r for r in rows if r.get("outcome") != "skipped"]
     n = len(rows)
     if n == 0:
-        return {"episodes": 0}
+        return {"episodes": 0, "skipped": skipped}
     success = np.array([r["success"] for r in rows], dtype=bool)
     excess = np.array(
         [r["excess"] for r in rows if r["success"] and r["excess"] is not None], dtype=float
@@ -59,6 +62,7 @@ def summarize(rows: list[dict[str, Any]]) -> dict[str, Any]:
         "decisions_per_s": 1e6 / mean_us if mean_us > 0 else math.nan,
         "unfamiliar": float(np.mean([r["unfamiliar"] or 0.0 for r in rows])),
         "no_optimum": int(sum(r["optimal_length"] is None for r in rows)),
+        "skipped": skipped,
     }
 
 
@@ -249,7 +253,7 @@ def write_report(results: list[str | os.PathLike[str]], directory: str | os.Path
     figures: list[Path] = []
     runs_info: list[str] = []
     for path in results:
-        with ResultsStore(path) as store:
+        with ResultsStore(path, readonly=True) as store:
             for run in store.runs():
                 if run["experiment"] != "navigation":
                     continue
@@ -269,6 +273,7 @@ def write_report(results: list[str | os.PathLike[str]], directory: str | os.Path
                     f"sensing {cfg.get('sensing', 'map')}, guard {cfg.get('guard')}, "
                     f"max steps {cfg['max_steps']}, contact ends episode "
                     f"{cfg.get('end_on_contact', False)}; copi {run['versions'].get('copi')}"
+                    + (f"; {s['skipped']} episodes skipped (no valid task)" if s["skipped"] else "")
                 )
                 fig = _fig3(store.trajectories(run["run_id"], label), out, label)
                 if fig is not None:
@@ -276,7 +281,7 @@ def write_report(results: list[str | os.PathLike[str]], directory: str | os.Path
     games: list[dict[str, Any]] = []
     game_traj: dict[str, list[dict[str, Any]]] = {}
     for path in results:
-        with ResultsStore(path) as store:
+        with ResultsStore(path, readonly=True) as store:
             for run in store.runs():
                 if run["experiment"] != "pursuit":
                     continue

@@ -16,10 +16,12 @@ import os
 import platform
 import sqlite3
 import time
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
+from urllib.parse import quote
 
 from copi.errors import CopiError
 
@@ -60,6 +62,7 @@ CREATE TABLE IF NOT EXISTS episodes (
     time_to_goal REAL,
     min_clearance REAL,
     smoothness REAL,
+    reason TEXT,
     PRIMARY KEY (run_id, method, episode)
 );
 CREATE TABLE IF NOT EXISTS games (
@@ -98,19 +101,30 @@ EPISODE_COLUMNS = [
     "episode", "world", "seed", "success", "reached", "collided", "timed_out", "steps",
     "contacts", "path_length", "optimal_length", "excess", "decision_us", "strategy_us",
     "unfamiliar", "no_policy", "family", "sensing", "outcome", "time_to_goal",
-    "min_clearance", "smoothness",
+    "min_clearance", "smoothness", "reason",
 ]  # fmt: skip
 
 # Columns added after the first format, with their SQL types: older stores gain them
 # (NULL in their old rows) when opened for writing.
 _ADDED_EPISODE_COLUMNS = {
     "family": "TEXT", "sensing": "TEXT", "outcome": "TEXT", "time_to_goal": "REAL",
-    "min_clearance": "REAL", "smoothness": "REAL",
+    "min_clearance": "REAL", "smoothness": "REAL", "reason": "TEXT",
 }  # fmt: skip
 
 
 class ResultsError(CopiError):
     """A results file is not a copi results store, or holds a different run."""
+
+
+APPLICATION_ID = 0x636F7069  # "copi": SQLite's header field for the file's owner
+STORE_VERSION = 1  # PRAGMA user_version of the format above
+
+_COPI_TABLES = {"runs", "episodes", "games", "trajectories"}
+_RUN_COLUMNS = {"run_id", "experiment", "method", "config", "versions", "created"}
+_FIRST_EPISODE_COLUMNS = {
+    "run_id", "experiment", "method", "world", "episode", "seed", "success", "collided",
+    "timed_out", "steps", "path_length", "optimal_length", "excess",
+}  # fmt: skip
 
 
 def _versions() -> dict[str, str]:
@@ -136,37 +150,147 @@ def _real(x: Any) -> Any:
     return x
 
 
-class ResultsStore:
-    """A results file. Opening checks that an existing file is one of copi's."""
+def _sqlite_message(exc: sqlite3.Error) -> str:
+    text = str(exc)
+    if "disk is full" in text or "disk I/O" in text:
+        return f"cannot write ({text}): free some space and rerun the same command to resume"
+    if "readonly" in text or "read-only" in text:
+        return f"cannot write ({text}): the file or its directory is read-only"
+    if "malformed" in text or "not a database" in text:
+        return f"corrupted results file ({text})"
+    if "locked" in text or "busy" in text:
+        return f"the file is locked by another process ({text})"
+    return text
 
-    def __init__(self, path: str | os.PathLike[str]) -> None:
+
+class ResultsStore:
+    """A results file. Opening checks that an existing file is one of copi's.
+
+    A file is written only if it is new (absent or empty) or already a copi store, as
+    its SQLite header says (``application_id`` "copi"); a store written before that
+    mark existed is recognised by its tables and columns (only copi's, with runs and
+    episodes as copi writes them) and marked when opened for writing. With
+    ``readonly=True`` (reading back, e.g. for a report) the file is never changed.
+    """
+
+    def __init__(self, path: str | os.PathLike[str], *, readonly: bool = False) -> None:
         self.path = Path(path)
+        self.readonly = readonly
         existed = self.path.exists()
         if existed and self.path.is_dir():
             raise ResultsError(f"{self.path}: is a directory, expected a results file")
-        if existed:
-            with open(self.path, "rb") as fh:
-                head = fh.read(16)
-            if head and head != b"SQLite format 3\x00":
+        size = self.path.stat().st_size if existed else 0
+        if readonly and not existed:
+            raise ResultsError(f"{self.path}: no such results file")
+        if readonly and size == 0:
+            raise ResultsError(f"{self.path}: an empty file, not a copi results store")
+        if size:
+            try:
+                with open(self.path, "rb") as fh:
+                    head = fh.read(100)
+            except OSError as exc:
+                raise ResultsError(f"{self.path}: cannot read ({exc.strerror})") from None
+            if not head.startswith(b"SQLite format 3\x00"):
                 raise ResultsError(f"{self.path}: not a copi results file (not SQLite)")
+            if len(head) < 100:
+                raise ResultsError(f"{self.path}: a truncated SQLite file")
+            app_id = int.from_bytes(head[68:72], "big")
+            if app_id not in (0, APPLICATION_ID):
+                raise ResultsError(
+                    f"{self.path}: an SQLite file of another application "
+                    f"(application_id {app_id:#x}), not a copi results store"
+                )
         try:
-            self.db = sqlite3.connect(self.path, timeout=30)
-            tables = {
-                r[0] for r in self.db.execute("SELECT name FROM sqlite_master WHERE type='table'")
-            }
-        except sqlite3.DatabaseError as exc:
-            raise ResultsError(f"{self.path}: not a readable results file ({exc})") from None
-        if existed and tables and not {"runs", "episodes"} <= tables:
+            if readonly:
+                uri = "file:" + quote(str(self.path.resolve())) + "?mode=ro"
+                self.db = sqlite3.connect(uri, uri=True, timeout=30)
+            else:
+                self.db = sqlite3.connect(self.path, timeout=30, isolation_level=None)
+        except sqlite3.Error as exc:
+            raise ResultsError(f"{self.path}: cannot open ({_sqlite_message(exc)})") from None
+        try:
+            if readonly:
+                self._check_format()
+            else:
+                with self._transaction():
+                    if not self._check_format():
+                        self._create()
+        except sqlite3.Error as exc:
             self.db.close()
-            raise ResultsError(f"{self.path}: an SQLite file, but not a copi results store")
-        self.db.executescript(SCHEMA)
+            raise ResultsError(f"{self.path}: {_sqlite_message(exc)}") from None
+        except ResultsError:
+            self.db.close()
+            raise
+
+    def _check_format(self) -> bool:
+        """Whether the file holds copi's tables (raises when it holds anything else)."""
+        app_id = self.db.execute("PRAGMA application_id").fetchone()[0]
+        version = self.db.execute("PRAGMA user_version").fetchone()[0]
+        tables = {
+            r[0] for r in self.db.execute("SELECT name FROM sqlite_master WHERE type='table'")
+        }
+        if app_id == APPLICATION_ID:
+            if version > STORE_VERSION:
+                raise ResultsError(
+                    f"{self.path}: written by a newer copi (store format {version}); "
+                    f"this copi reads formats up to {STORE_VERSION}: upgrade copi"
+                )
+            return True
+        if not tables:
+            if self.readonly:
+                raise ResultsError(f"{self.path}: an empty SQLite file, not a copi results store")
+            return False
+        runs = {r[1] for r in self.db.execute("PRAGMA table_info(runs)")}
+        episodes = {r[1] for r in self.db.execute("PRAGMA table_info(episodes)")}
+        if (
+            not tables <= _COPI_TABLES
+            or not _RUN_COLUMNS <= runs
+            or not _FIRST_EPISODE_COLUMNS <= episodes
+        ):
+            raise ResultsError(
+                f"{self.path}: an SQLite file, but not a copi results store (tables "
+                f"{', '.join(sorted(tables))}); nothing was changed"
+            )
+        # A store from before the format mark: adopted, and marked when written.
+        if not self.readonly:
+            self._create()
+        return True
+
+    def _create(self) -> None:
+        """Create (or complete) copi's tables and mark the file as a copi store."""
+        for statement in SCHEMA.split(";"):
+            if statement.strip():
+                self.db.execute(statement)
         have = {r[1] for r in self.db.execute("PRAGMA table_info(episodes)")}
         for column, kind in _ADDED_EPISODE_COLUMNS.items():
             if column not in have:
                 self.db.execute(f"ALTER TABLE episodes ADD COLUMN {column} {kind}")
         if "outcome" not in {r[1] for r in self.db.execute("PRAGMA table_info(games)")}:
             self.db.execute("ALTER TABLE games ADD COLUMN outcome TEXT")
-        self.db.commit()
+        self.db.execute(f"PRAGMA application_id = {APPLICATION_ID}")
+        self.db.execute(f"PRAGMA user_version = {STORE_VERSION}")
+
+    @contextmanager
+    def _transaction(self) -> Iterator[None]:
+        """One write transaction, taken at once (BEGIN IMMEDIATE), so that two processes
+        starting on the same file never both see it without a run and both add it."""
+        self.db.execute("BEGIN IMMEDIATE")
+        try:
+            yield
+        except BaseException:
+            if self.db.in_transaction:  # SQLite may have rolled back already (disk full)
+                self.db.execute("ROLLBACK")
+            raise
+        self.db.execute("COMMIT")
+
+    @contextmanager
+    def _errors(self) -> Iterator[None]:
+        """SQLite's errors (disk full, read-only, corrupted, locked) as one-line
+        ResultsErrors naming the file."""
+        try:
+            yield
+        except sqlite3.Error as exc:
+            raise ResultsError(f"{self.path}: {_sqlite_message(exc)}") from None
 
     def close(self) -> None:
         self.db.close()
@@ -183,43 +307,42 @@ class ResultsStore:
         """Register a run, or resume it. A different configuration under the same method
         label (and, where the configuration names them, the same family and sensing level)
         is refused (nothing in the file is changed)."""
-        rows = self.db.execute(
-            "SELECT run_id, config FROM runs WHERE experiment = ? AND method = ?",
-            (experiment, method),
-        ).fetchall()
-        for rid, text in rows:
-            if rid == run_id:
-                return
-            other = json.loads(text)
-            if any(other.get(k) != config.get(k) for k in ("family", "sensing")):
-                continue
-            diff = sorted(k for k in set(other) | set(config) if other.get(k) != config.get(k))
-            shown = ", ".join(
-                f"{k}: {other.get(k)!r} there, {config.get(k)!r} now" for k in diff[:3]
+        self._writable()
+        with self._errors(), self._transaction():
+            rows = self.db.execute(
+                "SELECT run_id, config FROM runs WHERE experiment = ? AND method = ?",
+                (experiment, method),
+            ).fetchall()
+            for rid, text in rows:
+                if rid == run_id:
+                    return
+                other = json.loads(text)
+                if any(other.get(k) != config.get(k) for k in ("family", "sensing")):
+                    continue
+                raise ResultsError(_difference(self.path, experiment, method, other, config))
+            self.db.execute(
+                "INSERT INTO runs VALUES (?, ?, ?, ?, ?, ?)",
+                (
+                    run_id,
+                    experiment,
+                    method,
+                    json.dumps(config, sort_keys=True),
+                    json.dumps(_versions()),
+                    time.time(),
+                ),
             )
-            raise ResultsError(
-                f"{self.path} already holds a {experiment} run of method {method!r} with a "
-                f"different configuration ({shown}); use another output file or method label"
-            )
-        self.db.execute(
-            "INSERT INTO runs VALUES (?, ?, ?, ?, ?, ?)",
-            (
-                run_id,
-                experiment,
-                method,
-                json.dumps(config, sort_keys=True),
-                json.dumps(_versions()),
-                time.time(),
-            ),
-        )
-        self.db.commit()
+
+    def _writable(self) -> None:
+        if self.readonly:
+            raise ResultsError(f"{self.path}: opened read-only")
 
     def done(self, run_id: str, method: str, table: str = "episodes") -> set[int]:
         """Episodes (or games, with ``table="games"``) of the run already stored."""
         key = {"episodes": "episode", "games": "game"}[table]
-        rows = self.db.execute(
-            f"SELECT {key} FROM {table} WHERE run_id = ? AND method = ?", (run_id, method)
-        )
+        with self._errors():
+            rows = self.db.execute(
+                f"SELECT {key} FROM {table} WHERE run_id = ? AND method = ?", (run_id, method)
+            ).fetchall()
         return {int(r[0]) for r in rows}
 
     def add(self, run_id: str, experiment: str, method: str, result: Any) -> None:
@@ -247,7 +370,9 @@ class ResultsStore:
         values = [int(row[c]) if isinstance(row[c], bool) else _real(row[c]) for c in columns]
         names = ", ".join(columns)
         marks = ", ".join("?" * len(columns))
-        with self.db:  # one transaction: the row and its trajectory, or nothing
+        self._writable()
+        # one transaction: the row and its trajectory, or nothing
+        with self._errors(), self._transaction():
             self.db.execute(
                 f"INSERT OR IGNORE INTO {table} (run_id, experiment, method, {names}) "
                 f"VALUES (?, ?, ?, {marks})",
@@ -262,9 +387,10 @@ class ResultsStore:
     # -- reading back -----------------------------------------------------------------
 
     def runs(self) -> list[dict[str, Any]]:
-        cur = self.db.execute(
-            "SELECT run_id, experiment, method, config, versions, created FROM runs"
-        )
+        with self._errors():
+            cur = self.db.execute(
+                "SELECT run_id, experiment, method, config, versions, created FROM runs"
+            ).fetchall()
         return [
             {"run_id": r[0], "experiment": r[1], "method": r[2], "config": json.loads(r[3]),
              "versions": json.loads(r[4]), "created": r[5]}
@@ -278,10 +404,9 @@ class ResultsStore:
         if run_id is not None:
             q += " WHERE run_id = ?"
             args = (run_id,)
-        return [
-            dict(zip(cols, r, strict=True))
-            for r in self.db.execute(q + " ORDER BY method, episode", tuple(args))
-        ]
+        with self._errors():
+            rows = self.db.execute(q + " ORDER BY method, episode", tuple(args)).fetchall()
+        return [dict(zip(cols, r, strict=True)) for r in rows]
 
     def games(self, run_id: str | None = None) -> list[dict[str, Any]]:
         cols = ["run_id", "experiment", "method", *GAME_COLUMNS]
@@ -290,15 +415,41 @@ class ResultsStore:
         if run_id is not None:
             q += " WHERE run_id = ?"
             args = (run_id,)
-        return [
-            dict(zip(cols, r, strict=True))
-            for r in self.db.execute(q + " ORDER BY method, game", args)
-        ]
+        with self._errors():
+            rows = self.db.execute(q + " ORDER BY method, game", args).fetchall()
+        return [dict(zip(cols, r, strict=True)) for r in rows]
 
     def trajectories(self, run_id: str, method: str) -> list[dict[str, Any]]:
-        cur = self.db.execute(
-            "SELECT episode, data FROM trajectories WHERE run_id = ? AND method = ? "
-            "ORDER BY episode",
-            (run_id, method),
-        )
+        with self._errors():
+            cur = self.db.execute(
+                "SELECT episode, data FROM trajectories WHERE run_id = ? AND method = ? "
+                "ORDER BY episode",
+                (run_id, method),
+            ).fetchall()
         return [{"episode": r[0], **json.loads(r[1])} for r in cur]
+
+
+# Keys of a run's identity that stand for an input's content, in words.
+_INPUTS = {
+    "capabilities_sha": "the capabilities file's content",
+    "world_file_sha": "the world file's content",
+    "code": "copi's version",
+}
+
+
+def _difference(
+    path: Path, experiment: str, method: str, other: dict[str, Any], config: dict[str, Any]
+) -> str:
+    """One line saying how a run's configuration differs from the one already stored."""
+    diff = sorted(k for k in set(other) | set(config) if other.get(k) != config.get(k))
+    changed = [_INPUTS[k] for k in diff if k in _INPUTS and other.get(k) and config.get(k)]
+    if changed and len(changed) == len(diff):
+        return (
+            f"{path} holds a {experiment} run of method {method!r} made with other inputs: "
+            f"{' and '.join(changed)} changed since; use another output file or method label"
+        )
+    shown = ", ".join(f"{k}: {other.get(k)!r} there, {config.get(k)!r} now" for k in diff[:3])
+    return (
+        f"{path} already holds a {experiment} run of method {method!r} with a "
+        f"different configuration ({shown}); use another output file or method label"
+    )

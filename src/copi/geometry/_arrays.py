@@ -12,13 +12,38 @@ from copi.errors import InvalidArgumentError
 FloatArray = NDArray[np.float64]
 
 
+def real_array(value: Any) -> FloatArray:
+    """``value`` as float64, refusing what would only cast with a loss or a warning:
+    complex numbers, objects, strings and ints too large for a float (TypeError or
+    ValueError, as ``np.asarray`` raises for what it cannot read)."""
+    if isinstance(value, np.ndarray) and value.dtype == np.float64:
+        return value
+    try:
+        arr = np.asarray(value)
+    except OverflowError:
+        raise ValueError("a number is too large for a float") from None
+    if arr.dtype.kind == "O":  # ragged, mixed, or ints beyond a float's range
+        try:
+            np.asarray(value, dtype=np.float64)
+        except OverflowError:
+            raise ValueError("a number is too large for a float") from None
+        except (TypeError, ValueError):
+            pass
+    if arr.dtype.kind not in "biuf":
+        raise TypeError(f"expected real numbers, found {arr.dtype} values")
+    try:
+        return arr.astype(np.float64)
+    except OverflowError:  # pragma: no cover - numpy reads such ints as objects
+        raise ValueError("a number is too large for a float") from None
+
+
 def as_points(value: Any, name: str, *, allow_single: bool = True) -> tuple[FloatArray, bool]:
     """``value`` as a C-contiguous float64 array of shape (n, 2).
 
     Returns the array and whether a single point of shape (2,) was given.
     """
     try:
-        arr = np.asarray(value, dtype=np.float64)
+        arr = real_array(value)
     except (TypeError, ValueError) as exc:
         raise InvalidArgumentError(f"{name} must be numbers of shape (n, 2); got {exc}") from None
     single = arr.ndim == 1
@@ -36,7 +61,7 @@ def as_points(value: Any, name: str, *, allow_single: bool = True) -> tuple[Floa
 def as_vector(value: Any, name: str, *, length: int | None = None) -> FloatArray:
     """``value`` as a finite float64 array of shape (n,) (or (length,))."""
     try:
-        arr = np.asarray(value, dtype=np.float64)
+        arr = real_array(value)
     except (TypeError, ValueError) as exc:
         raise InvalidArgumentError(f"{name} must be numbers of shape (n,); got {exc}") from None
     if arr.ndim != 1 or (length is not None and arr.shape[0] != length):
@@ -49,7 +74,7 @@ def as_vector(value: Any, name: str, *, length: int | None = None) -> FloatArray
 def as_segments(value: Any, name: str = "segments") -> FloatArray:
     """``value`` as a finite float64 array of shape (m, 4): rows (px, py, qx, qy)."""
     try:
-        arr = np.asarray(value, dtype=np.float64)
+        arr = real_array(value)
     except (TypeError, ValueError) as exc:
         raise InvalidArgumentError(f"{name} must be numbers of shape (m, 4); got {exc}") from None
     if arr.ndim != 2 or arr.shape[1] != 4:
@@ -66,7 +91,7 @@ def as_discs(centers: Any, radii: Any) -> tuple[FloatArray, FloatArray]:
         return np.zeros((0, 2)), np.zeros(0)
     c, _ = as_points(centers, "centers")
     r = (
-        np.broadcast_to(np.asarray(radii, dtype=np.float64), (c.shape[0],))
+        np.broadcast_to(_real_scalar(radii, "radii"), (c.shape[0],))
         if np.ndim(radii) == 0
         else as_vector(radii, "radii", length=c.shape[0])
     )
@@ -77,12 +102,16 @@ def as_discs(centers: Any, radii: Any) -> tuple[FloatArray, FloatArray]:
     return c, r
 
 
+def _real_scalar(value: Any, name: str) -> float:
+    try:
+        return float(real_array(value))
+    except (TypeError, ValueError):
+        raise InvalidArgumentError(f"{name} must be a real number; got {value!r}") from None
+
+
 def positive(value: Any, name: str) -> float:
     """``value`` as a finite float > 0."""
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise InvalidArgumentError(f"{name} must be a number; got {value!r}") from None
+    v = _real_scalar(value, name)
     if not np.isfinite(v) or v <= 0:
         raise InvalidArgumentError(f"{name} must be a finite number > 0; got {v}")
     return v

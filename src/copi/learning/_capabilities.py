@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import json
+import math
 import os
 import zipfile
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import IO, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -22,6 +24,27 @@ __all__ = ["FORMAT_VERSION", "Capabilities"]
 
 FORMAT = "copi-capabilities"
 FORMAT_VERSION = 1
+
+_REQUIRED = (
+    "nodes", "edges", "lm_points", "lm_members", "lm_node_landmark", "lm_anchors",
+    "lm_curve", "lm_criterion", "lm_merges", "op_perms", "op_matrices", "group_perms",
+    "group_matrices", "red_templates", "red_template_of", "red_element", "red_residual",
+    "pol_directions", "pol_passable", "pol_actions", "pol_lengths", "pol_path_xy",
+    "pol_path_start",
+)  # fmt: skip
+_MEMBERS = (*_REQUIRED, "prior_counts", "prior_probabilities", "metadata")
+"""The only members read from a file; any other is ignored, never unpacked."""
+MAX_MEMBER_BYTES = 1 << 28
+"""A member unpacking to more than this (256 MiB) is refused before it is unpacked."""
+MAX_TOTAL_BYTES = 1 << 30
+_NDIM = {
+    "nodes": 2, "edges": 2, "lm_points": 2, "lm_members": 1, "lm_node_landmark": 1,
+    "lm_anchors": 1, "lm_curve": 1, "lm_criterion": 1, "lm_merges": 2, "op_perms": 2,
+    "op_matrices": 3, "group_perms": 2, "group_matrices": 3, "red_templates": 1,
+    "red_template_of": 1, "red_element": 1, "red_residual": 1, "pol_directions": 2,
+    "pol_passable": 2, "pol_actions": 3, "pol_lengths": 2, "pol_path_xy": 2,
+    "pol_path_start": 1, "prior_counts": 2, "prior_probabilities": 2,
+}  # fmt: skip
 
 
 @dataclass(frozen=True, eq=False)
@@ -112,7 +135,11 @@ class Capabilities:
 
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Write the capabilities to ``path`` (``.npz``), atomically: an existing file is
-        replaced only once the new one is complete."""
+        replaced only once the new one is complete.
+
+        The same capabilities always give the same bytes (fixed member order and zip
+        timestamps; stage timings are left out of the file), so a file's hash names
+        its content."""
         from copi import __version__
 
         meta = {
@@ -125,11 +152,21 @@ class Capabilities:
             "directions": self.policies.names,
             "learner": self.policies.learner,
             "params": self.params,
-            "stats": self.stats,
+            "stats": _without_timings(self.stats),
         }
         arrays = self._arrays()
-        arrays["metadata"] = np.array(json.dumps(meta))
-        return atomic_write(path, lambda fh: np.savez_compressed(fh, **arrays))  # type: ignore[arg-type]
+        arrays["metadata"] = np.array(json.dumps(meta, sort_keys=True))
+
+        def write(fh: IO[bytes]) -> None:
+            with zipfile.ZipFile(fh, "w", compression=zipfile.ZIP_DEFLATED) as zf:
+                for name, arr in arrays.items():
+                    info = zipfile.ZipInfo(f"{name}.npy", date_time=(1980, 1, 1, 0, 0, 0))
+                    info.compress_type = zipfile.ZIP_DEFLATED
+                    info.external_attr = 0o644 << 16
+                    with zf.open(info, "w", force_zip64=True) as member:
+                        np.lib.format.write_array(member, np.asarray(arr), allow_pickle=False)
+
+        return atomic_write(path, write)
 
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> Capabilities:
@@ -146,17 +183,15 @@ class Capabilities:
         if p.is_dir():
             raise CapabilitiesFormatError(f"{p}: is a directory, expected a .npz capabilities file")
         try:
-            # Our own handle, closed whatever np.load makes of a broken file.
-            with open(p, "rb") as fh, np.load(fh, allow_pickle=False) as data:
-                arrays = {k: data[k] for k in data.files}
-        except (zipfile.BadZipFile, EOFError) as exc:
+            arrays = _read_members(p)
+        except (zipfile.BadZipFile, EOFError, zlib.error) as exc:
             raise CapabilitiesFormatError(
                 f"{p}: not a complete .npz archive (truncated or corrupt: {exc})"
             ) from None
-        except ValueError as exc:
+        except (NotImplementedError, RuntimeError) as exc:  # other compression, encryption
             raise CapabilitiesFormatError(f"{p}: not a copi capabilities file ({exc})") from None
         except OSError as exc:
-            raise CapabilitiesFormatError(f"{p}: cannot read ({exc})") from None
+            raise CapabilitiesFormatError(f"{p}: cannot read ({exc.strerror or exc})") from None
         return cls._from_arrays(p, arrays)
 
     @classmethod
@@ -178,14 +213,7 @@ class Capabilities:
                 f"{p}: written by a newer copi (format version {version}); this copi reads "
                 f"versions up to {FORMAT_VERSION}: upgrade copi"
             )
-        required = [
-            "nodes", "edges", "lm_points", "lm_members", "lm_node_landmark", "lm_anchors",
-            "lm_curve", "lm_criterion", "lm_merges", "op_perms", "op_matrices", "group_perms",
-            "group_matrices", "red_templates", "red_template_of", "red_element", "red_residual",
-            "pol_directions", "pol_passable", "pol_actions", "pol_lengths", "pol_path_xy",
-            "pol_path_start",
-        ]  # fmt: skip
-        missing = [k for k in required if k not in a]
+        missing = [k for k in _REQUIRED if k not in a]
         if missing:
             raise CapabilitiesFormatError(f"{p}: missing arrays {missing}")
         for k, v in a.items():
@@ -193,11 +221,17 @@ class Capabilities:
                 raise CapabilitiesFormatError(
                     f"{p}: array {k!r} has dtype {v.dtype}, expected numbers"
                 )
+        _check_arrays(p, meta, a)
         try:
             caps = cls._build(meta, a)
         except (KeyError, IndexError, ValueError, TypeError) as exc:
             raise CapabilitiesFormatError(f"{p}: inconsistent contents ({exc})") from None
-        _check_consistent(p, caps)
+        try:
+            _check_consistent(p, caps)
+        except (IndexError, ValueError, TypeError) as exc:
+            if isinstance(exc, CapabilitiesFormatError):
+                raise
+            raise CapabilitiesFormatError(f"{p}: inconsistent contents ({exc})") from None
         return caps
 
     @classmethod
@@ -265,7 +299,7 @@ class Capabilities:
             and self.policies.learner == other.policies.learner
             and self.landmarks.k == other.landmarks.k
             and self.params == other.params
-            and self.stats == other.stats
+            and _without_timings(self.stats) == _without_timings(other.stats)
         )
 
 
@@ -314,5 +348,149 @@ def _check_consistent(p: Path, c: Capabilities) -> None:
         pol.path_start.size and pol.path_start[-1] != len(pol.path_xy)
     ):
         problems.append("policy paths are not indexed consistently")
+    problems += _more_problems(c)
     if problems:
         raise CapabilitiesFormatError(f"{p}: inconsistent contents: {'; '.join(problems)}")
+
+
+def _without_timings(stats: dict[str, Any]) -> dict[str, Any]:
+    """``stats`` without the stages' wall times (which differ from one run to the next,
+    and so are not written: the same capabilities give the same file)."""
+    out = dict(stats)
+    if isinstance(out.get("stages"), list):
+        out["stages"] = [
+            {k: v for k, v in st.items() if k != "seconds"} if isinstance(st, dict) else st
+            for st in out["stages"]
+        ]
+    return out
+
+
+def _read_members(p: Path) -> dict[str, NDArray[Any]]:
+    """The known members of the archive at ``p`` as arrays, each refused before it is
+    unpacked if it would be too large, and never unpickled."""
+    out: dict[str, NDArray[Any]] = {}
+    total = 0
+    with zipfile.ZipFile(p) as zf:
+        infos = {i.filename: i for i in zf.infolist()}
+        for name in _MEMBERS:
+            info = infos.get(f"{name}.npy")
+            if info is None:
+                continue
+            total += info.file_size
+            if info.file_size > MAX_MEMBER_BYTES or total > MAX_TOTAL_BYTES:
+                raise CapabilitiesFormatError(
+                    f"{p}: member {name!r} unpacks to {info.file_size:,} bytes, more than a "
+                    f"capabilities file holds (at most {MAX_MEMBER_BYTES:,} per member, "
+                    f"{MAX_TOTAL_BYTES:,} in all)"
+                )
+            with zf.open(info) as fh:
+                try:
+                    out[name] = np.lib.format.read_array(fh, allow_pickle=False)
+                except ValueError as exc:
+                    what = (
+                        "holds Python objects, which copi never loads"
+                        if "allow_pickle" in str(exc) or "Object arrays" in str(exc)
+                        else f"is not an array ({str(exc).splitlines()[0]})"
+                    )
+                    raise CapabilitiesFormatError(f"{p}: member {name!r} {what}") from None
+    return out
+
+
+def _check_arrays(p: Path, meta: dict[str, Any], a: dict[str, NDArray[Any]]) -> None:
+    """Metadata types and finite numbers, member by member, before anything is built."""
+
+    def strings(key: str) -> bool:
+        v = meta.get(key)
+        return isinstance(v, list) and all(isinstance(x, str) for x in v)
+
+    bad = [k for k in ("operators", "words", "directions") if not strings(k)]
+    if not isinstance(meta.get("learner"), str):
+        bad.append("learner")
+    k = meta.get("landmark_k")
+    if not isinstance(k, int) or isinstance(k, bool) or k < 0:
+        bad.append("landmark_k")
+    bad += [k for k in ("params", "stats") if not isinstance(meta.get(k, {}), dict)]
+    if bad:
+        raise CapabilitiesFormatError(f"{p}: metadata entries {bad} have the wrong type")
+    for name, arr in a.items():
+        if name in _NDIM and arr.ndim != _NDIM[name]:
+            raise CapabilitiesFormatError(
+                f"{p}: member {name!r} has shape {arr.shape}, expected {_NDIM[name]} dimensions"
+            )
+        if name == "metadata" or arr.dtype.kind != "f":
+            continue
+        if name == "pol_lengths":  # an impassable direction's length is +inf
+            ok = not (np.isnan(arr).any() or np.isneginf(arr).any())
+        else:
+            ok = bool(np.isfinite(arr).all())
+        if not ok:
+            raise CapabilitiesFormatError(f"{p}: member {name!r} holds NaN or infinite values")
+    params, stats = meta.get("params", {}), meta.get("stats", {})
+    for key, where in (("max_range", params), ("agent_radius", params)):
+        v = where.get(key)
+        if v is not None and not (_number(v) and math.isfinite(v) and v > 0):
+            raise CapabilitiesFormatError(f"{p}: parameter {key} must be a number > 0; got {v!r}")
+    for key in ("familiarity_threshold", "quantization_error"):
+        v = stats.get(key)
+        if v is not None and not (_number(v) and v >= 0):
+            raise CapabilitiesFormatError(f"{p}: statistic {key} must be a number >= 0; got {v!r}")
+    rays = params.get("n_rays")
+    if rays is not None and not (isinstance(rays, int) and not isinstance(rays, bool)):
+        raise CapabilitiesFormatError(f"{p}: parameter n_rays must be an int; got {rays!r}")
+
+
+def _number(v: Any) -> bool:
+    return isinstance(v, int | float) and not isinstance(v, bool) and not math.isnan(v)
+
+
+def _in_range(arr: NDArray[Any], n: int) -> bool:
+    return not arr.size or (int(arr.min()) >= 0 and int(arr.max()) < n)
+
+
+def _more_problems(c: Capabilities) -> list[str]:
+    """Index ranges, permutations and plane actions that the online chain relies on."""
+    n, dim = c.nodes.shape
+    lm, g, red, pol = c.landmarks, c.group, c.reduction, c.policies
+    L, T, D = lm.n_landmarks, len(red.templates), len(pol.names)
+    problems = []
+    if (c.nodes < 0).any():
+        problems.append("map nodes hold negative ranges")
+    if lm.anchors.shape != (L,) or not _in_range(lm.anchors, n):
+        problems.append(f"landmark anchors must be {L} nodes in 0..{n - 1}")
+    if not _in_range(lm.merges, n + len(lm.merges)):
+        problems.append("landmark merges refer to missing nodes")
+    if not _in_range(red.template_of, max(T, 1)) or not _in_range(red.templates, max(L, 1)):
+        problems.append("reduction indices out of range")
+    if red.residual.shape != (L,):
+        problems.append(f"reduction residuals have shape {red.residual.shape}, expected ({L},)")
+    ident = np.arange(dim)
+    for what, perms, mats in (
+        ("group", g.perms, g.matrices),
+        ("operator", np.array([o.perm for o in g.operators]).reshape(-1, dim),
+         np.array([o.matrix for o in g.operators]).reshape(-1, 2, 2)),
+    ):  # fmt: skip
+        if perms.ndim != 2 or perms.shape[1] != dim or not (np.sort(perms, 1) == ident).all():
+            problems.append(f"{what} permutations are not permutations of 0..{dim - 1}")
+        elif mats.shape != (len(perms), 2, 2) or not np.allclose(
+            mats @ mats.transpose(0, 2, 1), np.eye(2), atol=1e-6
+        ):
+            problems.append(f"{what} matrices are not rotations or reflections")
+    if not problems and len(g.perms) <= 64:
+        known = {row.tobytes() for row in g.perms}
+        if len(known) != len(g.perms) or ident.astype(g.perms.dtype).tobytes() not in known:
+            problems.append("the group's elements are not distinct or lack the identity")
+        elif any(a[b].tobytes() not in known for a in g.perms for b in g.perms):
+            problems.append("the group is not closed under composition")
+    if (
+        pol.actions.shape == (T, D, 2)
+        and (np.hypot(*np.moveaxis(pol.actions, -1, 0)) > 1 + 1e-6).any()
+    ):
+        problems.append("policy actions are longer than one step")
+    start = pol.path_start
+    if start.size and (start[0] != 0 or (np.diff(start) < 0).any()):
+        problems.append("policy path offsets are not increasing from 0")
+    if c.priors is not None and (
+        c.priors.counts.shape != (T, D) or c.priors.probabilities.shape != (T, D)
+    ):
+        problems.append(f"action priors must have shape ({T}, {D})")
+    return problems

@@ -107,6 +107,11 @@ def learn(params: LearnParams | None = None, *, progress: Progress | None = None
         {"stage": "explore", "samples": ex.n_samples, "seconds": time.perf_counter() - t0}
     )
 
+    if ex.n_samples < 2:
+        raise InvalidArgumentError(
+            f"exploration gave {ex.n_samples} reading(s); the context map needs at least 2: "
+            "explore more worlds or steps"
+        )
     t0 = time.perf_counter()
     report("context map", 0, 1)
     gng = GrowingNeuralGas(p.max_nodes, epochs=p.epochs, random_state=p.seed).fit(ex.readings)

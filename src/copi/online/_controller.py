@@ -98,9 +98,16 @@ class ContextController:
             threshold = stats.get("familiarity_threshold")
             if threshold is None:
                 threshold = 2.0 * float(stats.get("quantization_error", np.inf))
-        self.threshold = float(threshold)
+        try:
+            self.threshold = float(threshold)
+        except (TypeError, ValueError):
+            raise InvalidArgumentError(f"threshold must be a number; got {threshold!r}") from None
+        if not self.threshold >= 0:  # NaN too
+            raise InvalidArgumentError(
+                f"threshold must be >= 0 (inf: all familiar); got {threshold!r}"
+            )
         self.continual = bool(continual)
-        if not (math.isfinite(guard) and guard >= 0):
+        if not (isinstance(guard, int | float) and math.isfinite(guard) and guard >= 0):
             raise InvalidArgumentError(f"guard must be a finite number >= 0; got {guard!r}")
         self.guard = float(guard)
         angles = ring_angles(self.n_rays)
@@ -137,10 +144,21 @@ class ContextController:
 
     # -- the chain ---------------------------------------------------------------------
 
+    def _static(self, static: Any, shape: tuple[int, ...]) -> NDArray[np.float64]:
+        """The static map's reading(s): ``shape``, ranges >= 0 (inf: nothing there)."""
+        st = _floats(static, "static")
+        if st.shape != shape:
+            raise InvalidArgumentError(f"static must have shape {shape}; got {st.shape}")
+        if not (st >= 0).all():
+            raise InvalidArgumentError(
+                "static readings must be ranges >= 0 (NaN or negative found)"
+            )
+        return st
+
     def _check(self, ranges: Any) -> NDArray[np.float64]:
         """Readings as floats with the capabilities' ray count (finiteness is checked in
         the compiled chain)."""
-        s = np.asarray(ranges, dtype=np.float64)
+        s = _floats(ranges, "ranges")
         if s.shape[-1:] != (self.n_rays,):
             raise InvalidArgumentError(
                 f"readings must have {self.n_rays} rays (as the capabilities); got shape {s.shape}"
@@ -172,17 +190,24 @@ class ContextController:
         explain : bool
             Also return a :class:`Decision` saying how the action came about.
         """
-        s = np.asarray(ranges, dtype=np.float64)
+        s = _floats(ranges, "ranges")
         if s.shape != (self.n_rays,):
             raise InvalidArgumentError(
                 f"a reading must have shape ({self.n_rays},) (as the capabilities); got {s.shape}"
             )
-        want = np.asarray(desired, dtype=np.float64)
+        if not (s >= 0).all():
+            raise InvalidArgumentError(f"readings must be finite ranges >= 0; got {s.tolist()}")
+        want = _floats(desired, "desired")
+        if want.shape != (2,) or not (math.isfinite(want[0]) and math.isfinite(want[1])):
+            raise InvalidArgumentError(
+                f"desired must be a finite direction of shape (2,); got {want.tolist()}"
+            )
+        reach = _reach(reach)
         out = self._out
         nodes, cand, ok = self._nodes, self._cand, self._ok
-        st = self._no_static if static is None else np.asarray(static, dtype=np.float64)
+        st = self._no_static if static is None else self._static(static, (self.n_rays,))
         _kernels.decide(
-            s, st, nodes, cand, ok, want[0], want[1], float(reach), self.guard,
+            s, st, nodes, cand, ok, want[0], want[1], reach, self.guard,
             self._cos, self._sin, self.max_range, out,
         )  # fmt: skip
         if out[2] < 0:
@@ -195,7 +220,7 @@ class ContextController:
             if self.continual:
                 nodes, cand, ok = self._learn_unfamiliar(s)
                 _kernels.decide(
-                    s, st, nodes, cand, ok, want[0], want[1], float(reach), self.guard,
+                    s, st, nodes, cand, ok, want[0], want[1], reach, self.guard,
                     self._cos, self._sin, self.max_range, out,
                 )  # fmt: skip
         action = out[:2].copy()
@@ -229,15 +254,30 @@ class ContextController:
             raise InvalidArgumentError(
                 f"readings must have shape (b, {self.n_rays}); got {s.shape}"
             )
-        want = np.asarray(desired, dtype=np.float64).reshape(-1, 2)
-        if len(want) != len(s):
+        if not (s >= 0).all():
+            raise InvalidArgumentError("readings must be ranges >= 0 (NaN or negative found)")
+        want = _floats(desired, "desired")
+        if want.shape != (len(s), 2):
             raise InvalidArgumentError(f"desired must have shape ({len(s)}, 2); got {want.shape}")
-        r = np.full(len(s), math.inf) if reach is None else np.asarray(reach, dtype=np.float64)
+        if not np.isfinite(want).all():
+            raise InvalidArgumentError("desired directions must be finite")
+        if reach is None:
+            r = np.full(len(s), math.inf)
+        else:
+            r = _floats(reach, "reach")
+            if r.ndim == 0:
+                r = np.full(len(s), float(r))
+            if r.shape != (len(s),):
+                raise InvalidArgumentError(f"reach must have shape ({len(s)},); got {r.shape}")
+            if not (r >= 0).all():
+                raise InvalidArgumentError(
+                    "reach must be >= 0 (inf: no limit); NaN or negative found"
+                )
         out = np.empty((len(s), 5))
         st = (
             np.broadcast_to(self._no_static, s.shape)
             if static is None
-            else np.asarray(static, dtype=np.float64).reshape(s.shape)
+            else self._static(static, s.shape)
         )
         s = np.ascontiguousarray(s)
         # Screen the nearest-node search with one float32 matrix product (BLAS); the
@@ -303,3 +343,27 @@ class ContextController:
     def unfamiliar_rate(self) -> float:
         """Share of decisions so far whose reading was unfamiliar."""
         return self.n_unfamiliar / self.n_decisions if self.n_decisions else 0.0
+
+
+def _floats(x: Any, name: str) -> NDArray[np.float64]:
+    """``x`` as a float array, or an InvalidArgumentError saying what it was (complex
+    numbers and objects are refused, not cast)."""
+    if isinstance(x, np.ndarray) and x.dtype == np.float64:
+        return x
+    try:
+        a = np.asarray(x)
+    except (TypeError, ValueError) as exc:
+        raise InvalidArgumentError(f"{name} must be real numbers; got {x!r} ({exc})") from None
+    if a.dtype.kind not in "biuf":
+        raise InvalidArgumentError(f"{name} must be real numbers; got {a.dtype} values")
+    return a.astype(np.float64, copy=False)
+
+
+def _reach(reach: Any) -> float:
+    try:
+        r = float(reach)
+    except (TypeError, ValueError):
+        raise InvalidArgumentError(f"reach must be a number >= 0; got {reach!r}") from None
+    if not r >= 0:
+        raise InvalidArgumentError(f"reach must be a number >= 0 (inf: no limit); got {reach!r}")
+    return r

@@ -27,6 +27,7 @@ from copi.world._gridmap import (  # noqa: F401 - re-exported
     cell_center,
     free_geometry,
     read_map,
+    without_pinches,
 )
 
 __all__ = [
@@ -91,14 +92,17 @@ def read_scenarios(path: str | os.PathLike[str]) -> list[Scenario]:
 
 def map_world(grid: GridMap, *, near: tuple[int, int] | None = None) -> World:
     """A map's free space as a :class:`~copi.world.World`: the connected region holding
-    cell ``near`` (the largest region by default), its walls and holes."""
-    geom = free_geometry(grid)
+    cell ``near`` (the largest region by default), its walls and holes.
+
+    The free space is shrunk by a hair (:func:`~copi.world._gridmap.without_pinches`), so
+    that blocked cells touching only at a corner become one hole."""
+    geom = without_pinches(free_geometry(grid))
     parts = list(geom.geoms) if isinstance(geom, MultiPolygon) else [geom]
     parts = [g for g in parts if isinstance(g, Polygon) and not g.is_empty]
     if not parts:
         raise InvalidWorldError(f"map {grid.name}: no free cell")
     if near is None:
-        region = max(parts, key=lambda g: g.area)
+        region = shapely.simplify(max(parts, key=lambda g: g.area), 0.0)
     else:
         c = cell_center(grid, near)
         inside = [g for g in parts if shapely.intersects_xy(g, c[0], c[1])]

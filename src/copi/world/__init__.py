@@ -15,7 +15,13 @@ from copi.world._families import CROWD_OBSTACLES, FAMILIES, check_family, in_sig
 from copi.world._family_indoor import IndoorParams, indoor_world
 from copi.world._family_maps import MOVINGAI_ENV, MapsParams, map_window_world, movingai_dir
 from copi.world._family_polygon import PolygonParams, is_star_shaped, polygon_world
-from copi.world._generate import WorldParams, place_obstacles, random_world, sample_start_goal
+from copi.world._generate import (
+    WorldParams,
+    check_task,
+    place_obstacles,
+    random_world,
+    sample_start_goal,
+)
 from copi.world._io import load_worlds, save_worlds
 from copi.world._render import draw_simulator, draw_world, rasterize, render_rgb
 from copi.world._sensor import RangeSensor
@@ -38,6 +44,7 @@ __all__ = [
     "World",
     "WorldParams",
     "check_family",
+    "check_task",
     "draw_simulator",
     "draw_world",
     "in_sight",

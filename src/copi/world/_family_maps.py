@@ -14,7 +14,7 @@ from shapely.geometry import Polygon
 
 from copi._rng import Seed, as_generator
 from copi.errors import InvalidArgumentError, InvalidWorldError
-from copi.world._gridmap import free_geometry, read_map
+from copi.world._gridmap import free_geometry, read_map, without_pinches
 from copi.world._world import ObstacleSpec, World
 
 __all__ = ["MOVINGAI_ENV", "MapsParams", "map_window_world", "movingai_dir"]
@@ -168,10 +168,7 @@ def _window(
 ) -> World | None:
     cut = shapely.intersection(m.free, shapely.box(x0, y0, x0 + wx, y0 + wy))
     cut = shapely.affinity.affine_transform(cut, [scale, 0, 0, scale, -scale * x0, -scale * y0])
-    # Blocked cells meeting only at a corner make holes that touch each other or the
-    # boundary at a point (a valid Shapely polygon, not a valid world); shrinking the free
-    # space by a hair merges them and cuts the zero-width pinches in between.
-    cut = shapely.buffer(cut, -1e-3, join_style="mitre")
+    cut = without_pinches(cut)
     parts = [g for g in shapely.get_parts(cut) if isinstance(g, Polygon) and g.area > 0]
     if not parts:
         return None

@@ -14,7 +14,7 @@ from copi.geometry._arrays import FloatArray
 from copi.geometry._kernels import clearance as _clearance_kernel
 from copi.world._world import ObstacleSpec, World
 
-__all__ = ["WorldParams", "place_obstacles", "random_world", "sample_start_goal"]
+__all__ = ["WorldParams", "check_task", "place_obstacles", "random_world", "sample_start_goal"]
 
 
 @dataclass(frozen=True)
@@ -189,6 +189,51 @@ def sample_start_goal(
         f"world {world.name!r}: found no free start and goal {min_distance:g} apart "
         f"for an agent of radius {radius:g}"
     )
+
+
+def check_task(world: World, *, radius: float = 0.3, min_distance: float = 10.0) -> None:
+    """Refuse a world in which :func:`sample_start_goal` can never find a task: no two
+    free points ``min_distance`` apart in one connected component of the free space
+    eroded by ``radius`` (or none that far from the world's fixed start or goal).
+
+    Raises
+    ------
+    InvalidWorldError
+        Naming the world and the largest distance its free space offers.
+
+    Examples
+    --------
+    >>> check_task(random_world(1))
+    >>> check_task(World([[0, 0], [4, 0], [4, 4], [0, 4]], name="box"))  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    copi.errors.InvalidWorldError: world 'box': no free start and goal 10 apart ... 4.8 at most)
+    """
+    if world.start is not None and world.goal is not None:
+        return
+    free = world.polygon.buffer(-radius, quad_segs=8)
+    parts = list(free.geoms) if isinstance(free, MultiPolygon) else [free]
+    parts = [g for g in parts if isinstance(g, Polygon) and g.area > 0]
+    if not parts:
+        raise InvalidWorldError(
+            f"world {world.name!r}: no free space for a disc of radius {radius:g}"
+        )
+    fixed = world.start if world.start is not None else world.goal
+    if fixed is not None:
+        point = shapely.points(fixed)
+        part = parts[int(np.argmin([g.distance(point) for g in parts]))]
+        xy = np.asarray(part.exterior.coords)
+        span = float(np.hypot(*(xy - fixed).T).max())
+    else:
+        span = 0.0
+        for part in parts:
+            xy = np.asarray(part.convex_hull.exterior.coords)
+            span = max(span, float(np.hypot(*(xy[:, None] - xy[None]).transpose(2, 0, 1)).max()))
+    if span < min_distance:
+        raise InvalidWorldError(
+            f"world {world.name!r}: no free start and goal {min_distance:g} apart for an "
+            f"agent of radius {radius:g} (its free space spans {span:.2g} at most)"
+        )
 
 
 def place_obstacles(

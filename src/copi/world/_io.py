@@ -14,11 +14,22 @@ from copi._files import atomic_write
 from copi.errors import CopiError, InvalidWorldError, WorldFileError
 from copi.world._world import World
 
-__all__ = ["load_worlds", "save_worlds"]
+__all__ = ["MAX_WORLD_FILE_BYTES", "MAX_WORLDS", "load_worlds", "save_worlds"]
+
+MAX_WORLD_FILE_BYTES = 32 * 1024 * 1024
+"""World files larger than this (32 MiB) are refused before they are read."""
+MAX_WORLDS = 20_000
+"""World files with more worlds than this are refused before any world is built."""
 
 
-def load_worlds(path: str | os.PathLike[str]) -> list[World]:
-    """Read a world file: one world object or a list of them.
+def load_worlds(
+    path: str | os.PathLike[str],
+    *,
+    max_bytes: int = MAX_WORLD_FILE_BYTES,
+    max_worlds: int = MAX_WORLDS,
+) -> list[World]:
+    """Read a world file: one world object or a list of them (at most ``max_worlds``, in
+    at most ``max_bytes`` of UTF-8, a byte-order mark allowed).
 
     Raises
     ------
@@ -37,7 +48,13 @@ def load_worlds(path: str | os.PathLike[str]) -> list[World]:
     """
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8")
+        size = p.stat().st_size
+        if size > max_bytes and p.is_file():
+            raise WorldFileError(
+                f"{p}: {size:,} bytes, more than a world file may hold ({max_bytes:,}); "
+                "split it into several files"
+            )
+        text = p.read_text(encoding="utf-8-sig")
     except FileNotFoundError:
         raise WorldFileError(f"{p}: no such world file") from None
     except IsADirectoryError:
@@ -50,7 +67,14 @@ def load_worlds(path: str | os.PathLike[str]) -> list[World]:
         data, starts = _parse_with_positions(text)
     except json.JSONDecodeError as exc:
         raise WorldFileError(f"{p}:{exc.lineno}:{exc.colno}: not valid JSON ({exc.msg})") from None
+    except RecursionError:
+        raise WorldFileError(f"{p}: JSON nested too deeply to be a world file") from None
     items = data if isinstance(data, list) else [data]
+    if len(items) > max_worlds:
+        raise WorldFileError(
+            f"{p}: {len(items):,} worlds, more than a world file may hold ({max_worlds:,}); "
+            "split it into several files"
+        )
     if isinstance(data, list) and not data:
         raise WorldFileError(f"{p}:1:1: expected a world object or a non-empty list; got []")
     worlds = []

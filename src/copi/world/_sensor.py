@@ -9,7 +9,7 @@ import numpy as np
 
 from copi.errors import InvalidArgumentError
 from copi.geometry import cast_rays, ring_angles
-from copi.geometry._arrays import FloatArray
+from copi.geometry._arrays import FloatArray, positive_int
 from copi.world._world import World
 
 __all__ = ["RangeSensor"]
@@ -39,8 +39,7 @@ class RangeSensor:
     sin: FloatArray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        if isinstance(self.n_rays, bool) or int(self.n_rays) != self.n_rays or self.n_rays < 1:
-            raise InvalidArgumentError(f"n_rays must be a positive int; got {self.n_rays!r}")
+        positive_int(self.n_rays, "n_rays")
         mr = float(self.max_range)
         if not np.isfinite(mr) or mr <= 0:
             raise InvalidArgumentError(f"max_range must be a finite number > 0; got {mr}")

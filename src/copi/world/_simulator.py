@@ -10,7 +10,7 @@ import numpy as np
 
 from copi._rng import Seed, as_generator
 from copi.errors import InvalidArgumentError
-from copi.geometry._arrays import FloatArray, as_vector
+from copi.geometry._arrays import FloatArray, as_vector, positive
 from copi.geometry._kernels import step_world
 from copi.world._generate import place_obstacles, sample_start_goal
 from copi.world._sensor import RangeSensor
@@ -89,7 +89,7 @@ class Simulator:
         self.world = world
         self.sensor = sensor or RangeSensor()
         self.rng = as_generator(seed)
-        self.agent_radius = float(agent_radius)
+        self.agent_radius = positive(agent_radius, "agent_radius")
         self.speed = float(speed)
         self.turn_sd = float(turn_sd)
         self.goal_tolerance = float(goal_tolerance)
@@ -126,6 +126,7 @@ class Simulator:
         moving obstacles (``obstacles``, else the world's spec, else the paper's), all from
         ``seed``. Obstacles start clear of the agent and of the goal by at least one agent
         step (so that the snapshot at t = 0 has the goal free)."""
+        agent_radius = positive(agent_radius, "agent_radius")
         rng = as_generator(seed)
         start, goal = sample_start_goal(world, rng, radius=agent_radius, min_distance=min_distance)
         spec = obstacles or world.obstacles or ObstacleSpec()

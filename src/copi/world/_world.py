@@ -30,16 +30,23 @@ def _at(*where: str | int) -> Iterator[None]:
         raise InvalidWorldError(str(exc), where=where) from None
 
 
+MAX_OBSTACLES = 10_000
+"""More moving obstacles than this in one world are refused (a typo, not a crowd)."""
+
+
 def _pair(value: Any, name: str, *, integer: bool = False) -> tuple[float, float]:
     """A number or a [lo, hi] pair as (lo, hi), checked finite, ordered and >= 0."""
     if isinstance(value, bool):
         raise InvalidWorldError(f"{name} must be a number or a [low, high] pair; got {value!r}")
     if isinstance(value, int | float | np.integer | np.floating):
-        lo = hi = float(value)
+        try:
+            lo = hi = float(value)
+        except OverflowError:
+            raise InvalidWorldError(f"{name} is too large for a float") from None
     elif isinstance(value, list | tuple) and len(value) == 2:
         try:
             lo, hi = float(value[0]), float(value[1])
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):
             raise InvalidWorldError(
                 f"{name} must be a number or a [low, high] pair; got {value!r}"
             ) from None
@@ -69,6 +76,10 @@ class ObstacleSpec:
 
     def __post_init__(self) -> None:
         lo, hi = _pair(self.count, "obstacles.count", integer=True)
+        if hi > MAX_OBSTACLES:
+            raise InvalidWorldError(
+                f"obstacles.count must be at most {MAX_OBSTACLES}; got {self.count!r}"
+            )
         object.__setattr__(self, "count", (int(lo), int(hi)))
         r = _pair(self.radius, "obstacles.radius")
         if r[0] <= 0:
@@ -198,8 +209,8 @@ class World:
         boundary = orient(boundary, ccw=True)
         holes = tuple(orient(h, ccw=False) for h in holes)
         polygon = Polygon(boundary, holes)
-        if not polygon.is_valid:  # pragma: no cover - the checks above catch known cases
-            raise InvalidWorldError(f"invalid polygon: {shapely.is_valid_reason(polygon)}")
+        if not polygon.is_valid:
+            raise _invalid_message(outer, hole_polys, polygon)
         for ring in (boundary, *holes):
             ring.setflags(write=False)
         segments = np.ascontiguousarray(np.vstack([ring_segments(r) for r in (boundary, *holes)]))
@@ -362,6 +373,25 @@ def _simple_ring(coords: Any, name: str) -> FloatArray:
             f"{name} must be a simple polygon; edges {i} and {j} cross at ({x:.6g}, {y:.6g})"
         )
     return ring
+
+
+def _invalid_message(outer: Polygon, holes: list[Polygon], polygon: Polygon) -> InvalidWorldError:
+    """Why boundary and holes do not make a valid polygon, in the world's terms."""
+    for k, hp in enumerate(holes):
+        shared = hp.boundary.intersection(outer.boundary)
+        if shared.length > 0:
+            p = shared.representative_point()
+            return InvalidWorldError(
+                f"hole {k} shares an edge with the boundary near ({p.x:.6g}, {p.y:.6g}); a "
+                "hole must lie inside the boundary, touching it at single points at most "
+                "(make such an obstacle part of the boundary instead)",
+                where=("holes", k),
+            )
+    reason = shapely.is_valid_reason(polygon)
+    return InvalidWorldError(
+        f"boundary and holes do not bound one valid region ({reason.split('[')[0].lower()} "
+        f"at {reason[reason.find('[') :] if '[' in reason else 'an unknown place'})"
+    )
 
 
 def _outside_message(k: int, hole: FloatArray, outer: Polygon) -> str:

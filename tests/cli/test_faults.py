@@ -4,6 +4,7 @@ bad input, one line and exit 130 for Ctrl-C, no worker outliving its run."""
 from __future__ import annotations
 
 import os
+import re
 import signal
 import sqlite3
 import subprocess
@@ -34,9 +35,14 @@ def run(args: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, 
     return int(exit_.value.code or 0), captured.out, captured.err
 
 
+# Progress lines (output not a terminal) may precede the error: "label: done/total (pct),
+# ..., elapsed ...". They report work that finished; the error itself is one line.
+_PROGRESS = re.compile(r"^[^:]+: [\d.]+(/[\d.]+ \(\d+ %\))?, .*elapsed [\d.hms ]+$")
+
+
 def _one_line_error(code: int, err: str) -> str:
     assert code == 2, err
-    lines = err.strip().splitlines()
+    lines = [ln for ln in err.strip().splitlines() if not _PROGRESS.match(ln)]
     assert len(lines) == 1 and lines[0].startswith("copi: error: "), err
     assert "Traceback" not in err and ".tmp" not in err
     return lines[0]

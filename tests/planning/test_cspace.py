@@ -68,9 +68,19 @@ def test_length_is_bracketed_by_inner_and_outer_polygons(seed: int, quad_segs: i
     assert outer.area <= inner.area
     if hi.found:
         assert lo.found
-        # lo <= true optimum <= hi, and hi / lo - 1 <= the documented bound
+        # lo <= true optimum <= hi always; hi / lo - 1 <= the documented bound when the two
+        # spaces have the same topology (where a gap between two discs is open inside and
+        # closed outside, the outer path must go another way round; hypothesis found such
+        # a snapshot, seed 10000 with quad_segs 2, where the ratio is 8.8 % > 8.2 %)
         assert lo.length <= hi.length + 1e-9
-        assert hi.length / lo.length - 1 <= length_error_bound(quad_segs) + 1e-9
+        if _topology(outer) == _topology(inner):
+            assert hi.length / lo.length - 1 <= length_error_bound(quad_segs) + 1e-9
+
+
+def _topology(space) -> tuple[int, int]:  # type: ignore[no-untyped-def]
+    """(connected parts, holes) of a polygonal free space."""
+    parts = shapely.get_parts(space)
+    return len(parts), int(shapely.get_num_interior_rings(parts).sum())
 
 
 def test_around_one_corner_against_the_exact_length() -> None:

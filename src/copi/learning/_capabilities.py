@@ -46,6 +46,14 @@ _NDIM = {
     "pol_path_start": 1, "prior_counts": 2, "prior_probabilities": 2,
 }  # fmt: skip
 
+# Members holding indices, counts or flags: written as integers (or booleans), and
+# refused as floats (a NaN or 1e19 cast to an index would be read as anything).
+_INTEGER = frozenset(
+    {"edges", "op_perms", "group_perms", "lm_members", "lm_node_landmark", "lm_anchors",
+     "lm_merges", "red_templates", "red_template_of", "red_element", "pol_passable",
+     "pol_path_start"}
+)  # fmt: skip
+
 
 @dataclass(frozen=True, eq=False)
 class Capabilities:
@@ -220,6 +228,10 @@ class Capabilities:
             if k != "metadata" and v.dtype.kind not in "biuf":
                 raise CapabilitiesFormatError(
                     f"{p}: array {k!r} has dtype {v.dtype}, expected numbers"
+                )
+            if k in _INTEGER and v.dtype.kind not in "biu":
+                raise CapabilitiesFormatError(
+                    f"{p}: array {k!r} has dtype {v.dtype}, expected integers (indices)"
                 )
         _check_arrays(p, meta, a)
         try:

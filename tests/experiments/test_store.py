@@ -96,6 +96,24 @@ def test_a_store_from_before_the_mark_is_adopted(tmp_path: Path) -> None:
         assert db.execute("PRAGMA application_id").fetchone()[0] == APPLICATION_ID
 
 
+def test_a_store_from_an_earlier_copi_reads_without_its_new_columns(tmp_path: Path) -> None:
+    # Found after the merge: `report` on a store of the previous version failed on the
+    # newest column (reading does not migrate, so missing columns read as NULL).
+    path = tmp_path / "earlier.sqlite"
+    _store_with_rows(path)
+    with sqlite3.connect(path) as db:
+        for column in ("reason", "smoothness", "outcome"):
+            db.execute(f"ALTER TABLE episodes DROP COLUMN {column}")
+        db.execute("ALTER TABLE games DROP COLUMN outcome")
+    before = path.read_bytes()
+    with ResultsStore(path, readonly=True) as store:
+        rows = store.episodes()
+        assert store.games() == []
+    assert len(rows) == 3 and rows[0]["reason"] is None and rows[0]["outcome"] is None
+    assert rows[0]["path_length"] == 9.5
+    assert path.read_bytes() == before
+
+
 def test_reading_never_writes(tmp_path: Path) -> None:
     path = tmp_path / "r.sqlite"
     _store_with_rows(path)

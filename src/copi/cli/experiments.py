@@ -122,8 +122,13 @@ def evaluate_command(
         f"{output}: {method} ({sensing}): {s['episodes']} episodes{skipped}, success "
         f"{100 * s['success']:.1f} %, collision {100 * s['contact']:.1f} %, timeout "
         f"{100 * s['timeout']:.1f} %, median excess {100 * s['excess_median']:.1f} %, "
-        f"{s['decisions_per_s']:,.0f} decisions/s"
+        f"standing still {100 * s['no_policy']:.1f} %, unfamiliar "
+        f"{100 * s['unfamiliar']:.1f} %, {s['decisions_per_s']:,.0f} decisions/s"
     )
+    from copi.experiments.report import warnings_for
+
+    for w in warnings_for(method, s):
+        console.print(f"copi: warning: {w}", highlight=False, markup=False)
 
 
 @app.command("benchmark")

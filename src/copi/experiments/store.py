@@ -397,9 +397,16 @@ class ResultsStore:
             for r in cur
         ]  # fmt: skip
 
+    def _select(self, table: str, cols: list[str]) -> str:
+        """The column list of a SELECT: columns a store written by an earlier copi lacks
+        (it is read as it is, not migrated) read as NULL."""
+        with self._errors():
+            have = {r[1] for r in self.db.execute(f"PRAGMA table_info({table})")}
+        return ", ".join(c if c in have else f"NULL AS {c}" for c in cols)
+
     def episodes(self, run_id: str | None = None) -> list[dict[str, Any]]:
         cols = ["run_id", "experiment", "method", *EPISODE_COLUMNS]
-        q = f"SELECT {', '.join(cols)} FROM episodes"
+        q = f"SELECT {self._select('episodes', cols)} FROM episodes"
         args: Iterable[Any] = ()
         if run_id is not None:
             q += " WHERE run_id = ?"
@@ -410,7 +417,7 @@ class ResultsStore:
 
     def games(self, run_id: str | None = None) -> list[dict[str, Any]]:
         cols = ["run_id", "experiment", "method", *GAME_COLUMNS]
-        q = f"SELECT {', '.join(cols)} FROM games"
+        q = f"SELECT {self._select('games', cols)} FROM games"
         args: tuple[Any, ...] = ()
         if run_id is not None:
             q += " WHERE run_id = ?"

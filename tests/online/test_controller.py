@@ -23,14 +23,30 @@ def _by_hand(caps, s, want, reach=math.inf):
     m_inv = np.linalg.inv(caps.group.matrices[g])
     ok = caps.policies.passable[template]
     cand = caps.policies.actions[template] @ m_inv.T
-    if not ok.any():
-        return node, landmark, template, g, None, np.zeros(2)
     u = np.asarray(want, float) / np.linalg.norm(want)
+    compass = not ok.any()
+    if compass:  # no policy here: every compass direction whose step keeps off the hits
+        n = len(ok)
+        a = 2 * np.pi * np.arange(n) / n
+        cand = np.column_stack([np.cos(a), np.sin(a)])
+        hit = s < 10.0
+        pts = np.column_stack([s[hit] * np.cos(2 * np.pi * np.flatnonzero(hit) / len(s)),
+                               s[hit] * np.sin(2 * np.pi * np.flatnonzero(hit) / len(s))])
+        wall = min(0.31, s.min() - 1e-6)
+        ok = np.ones(n, dtype=bool)
+        for d in range(n):
+            st_ = 1.0 if reach >= 1.0 else max(cand[d] @ u * reach, 0.5 * reach)
+            t = np.clip(pts @ cand[d], 0.0, st_)
+            if len(pts) and np.hypot(*(pts - t[:, None] * cand[d]).T).min() < wall:
+                ok[d] = False
+        if not ok.any():
+            return node, landmark, template, g, None, np.zeros(2)
     d = int(np.argmax(np.where(ok, cand @ u, -np.inf)))
     step = 1.0  # a full step, unless the aim is nearer than that: then come level with
     if reach < 1.0:  # it, and go at least half way (a sideways step must not vanish)
         step = max(cand[d] @ u * reach, 0.5 * reach)
-    return node, landmark, template, g, d, cand[d] * step
+    choice = f"compass {caps.policies.names[d]}" if compass else d
+    return node, landmark, template, g, choice, cand[d] * step
 
 
 @settings(max_examples=60, deadline=None)
@@ -43,7 +59,9 @@ def test_the_chain_matches_a_plain_rendition(small_caps, i, angle, reach) -> Non
     node, landmark, template, g, d, expected = _by_hand(caps, READINGS[i], want, reach)
     assert (info.node, info.landmark, info.template) == (node, landmark, template)
     assert info.element == (caps.group.words[g] or "id")
-    assert info.choice == (None if d is None else caps.policies.names[d])
+    assert info.choice == (
+        None if d is None else d if isinstance(d, str) else caps.policies.names[d]
+    )
     np.testing.assert_allclose(action, expected, atol=1e-12)
     assert len(info.candidates) == len(info.candidate_actions)
     assert np.linalg.norm(action) <= 1 + 1e-12
@@ -156,3 +174,33 @@ def test_every_entry_point_checks_shapes_and_values(small_caps, call) -> None:
 def test_bad_controller_parameters_are_refused(small_caps, bad) -> None:
     with pytest.raises(InvalidArgumentError):
         ContextController(small_caps[0], **bad)
+
+
+def test_a_guarded_agent_resting_against_a_wall_can_still_move() -> None:
+    # Found on a Moving AI room map: an agent 0.34 from a wall (0.04 from touching it)
+    # refused every step, since each step's path starts where it stands, too near the
+    # wall; it stood still for good. A step is judged by whether it brings it nearer.
+    from copi.experiments._episode import run_agent
+    from copi.experiments.methods import make_agent
+    from copi.world import Simulator, World
+
+    room = World([[0, 0], [20, 0], [20, 20], [0, 20]])
+    sim = Simulator(room, [0.34, 10.0], [10.0, 10.0], np.zeros((0, 2)), np.zeros(0))
+    res = run_agent(make_agent("compass-guard"), sim, sensing="map", max_steps=30)
+    assert res.outcome == "success" and res.no_policy == 0
+
+
+def test_a_template_with_no_policy_falls_back_to_the_compass(small_caps) -> None:
+    caps, _ = small_caps
+    ctl = ContextController(caps, guard=1.2)
+    ctl._ok[:] = False  # as if every template offered no policy
+    s = np.full(caps.n_rays, 9.0)
+    action, info = ctl.decide(s, [1.0, 0.2], explain=True)
+    assert info is not None and info.choice == f"compass {caps.policies.names[0]}"
+    assert action[0] == pytest.approx(1.0) and abs(action[1]) < 1e-12
+    # Never into a wall: with a wall 0.4 east the fallback leaves east out.
+    s2 = s.copy()
+    s2[0] = 0.4
+    action2, info2 = ctl.decide(s2, [1.0, 0.0], explain=True)
+    assert info2 is not None and info2.choice is not None
+    assert action2[0] < 0.9

@@ -36,6 +36,10 @@ def learn_command(
     learner: Annotated[
         str, typer.Option("--learner", help="astar (the paper's) or value-iteration.")
     ] = "astar",
+    family: Annotated[
+        str,
+        typer.Option("--family", help="World family explored (star: the paper's worlds)."),
+    ] = "star",
     workers: Annotated[int, typer.Option("--workers", min=1, help="Exploring processes.")] = 1,
 ) -> None:
     """Learn capabilities offline, without any task (paper §II): explore, grow the
@@ -53,6 +57,7 @@ def learn_command(
         landmarks=landmarks,
         directions=directions,
         learner=learner,
+        family=family,
     )
     output.parent.mkdir(parents=True, exist_ok=True)
     with progress() as bar:

@@ -10,6 +10,7 @@ import typer
 from rich.table import Table
 
 from copi.cli._common import app, out, progress, safe_name, world_app
+from copi.errors import CopiError
 
 
 @world_app.command("sample")
@@ -91,13 +92,30 @@ def world_import_movingai(
             "Default: the largest region.",
         ),
     ] = None,
+    passage: Annotated[
+        float | None,
+        typer.Option(
+            "--passage",
+            min=0.1,
+            help="Scale the map so that its narrow passages are this many agent steps wide "
+            "and give it moving obstacles sized to them, for navigation experiments "
+            "(e.g. 3). Default: one cell is one step, as in Moving AI's scenarios.",
+        ),
+    ] = None,
 ) -> None:
     """Turn a Moving AI grid map into a world: blocked cells become walls and holes."""
     from copi.planning.movingai import map_world, read_map
     from copi.world import save_worlds
+    from copi.world._family_maps import scaled_map_world
 
     grid = read_map(map_file)
-    world = map_world(grid, near=near)
+    if passage is not None:
+        if near is not None:
+            raise CopiError("--near and --passage do not go together (--passage keeps the "
+                            "largest region)")  # fmt: skip
+        world = scaled_map_world(map_file, passage=passage)
+    else:
+        world = map_world(grid, near=near)
     output.parent.mkdir(parents=True, exist_ok=True)
     save_worlds([world], output)
     out.print(

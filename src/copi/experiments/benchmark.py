@@ -40,7 +40,7 @@ from copi.experiments.navigation import (
     skipped_row,
 )
 from copi.geometry._arrays import positive_int
-from copi.learning import Capabilities
+from copi.learning import Capabilities, LearnParams
 from copi.online import check_strategy
 from copi.world import check_family
 
@@ -207,8 +207,10 @@ def ensure_capabilities(
 
 def _check_learnt_with(path: Path, wanted: dict[str, Any]) -> None:
     stored = Capabilities.load(path).params
+    # A parameter added after a file was learnt had its default then.
+    defaults = dataclasses.asdict(LearnParams())
     for key in sorted(set(wanted) | set(stored)):
-        if key == "workers" or stored.get(key) == wanted.get(key):
+        if key == "workers" or stored.get(key, defaults.get(key)) == wanted.get(key):
             continue
         raise InvalidArgumentError(
             f"{path} was learnt with {key}={stored.get(key, 'unset')!r}, not "

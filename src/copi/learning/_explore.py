@@ -11,7 +11,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 from copi.geometry._arrays import positive_int
-from copi.world import RandomWalk, RangeSensor, Simulator, WorldParams, random_world
+from copi.world import (
+    RandomWalk,
+    RangeSensor,
+    Simulator,
+    WorldParams,
+    check_family,
+    random_world,
+    sample_world,
+)
 
 __all__ = ["Exploration", "explore"]
 
@@ -33,10 +41,19 @@ class Exploration:
 
 
 def _explore_one(
-    seed: int, k: int, steps: int, params: WorldParams, sensor: RangeSensor, agent_radius: float
+    seed: int,
+    k: int,
+    steps: int,
+    params: WorldParams,
+    sensor: RangeSensor,
+    agent_radius: float,
+    family: str = "star",
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     rng = np.random.default_rng([seed, k])
-    world = random_world(rng, params=params)
+    if family == "star":
+        world = random_world(rng, params=params)
+    else:
+        world = sample_world(family, rng)
     sim = Simulator.from_world(world, rng, agent_radius=agent_radius, sensor=sensor)
     walk = RandomWalk(seed=rng)
     readings = np.empty((steps, sensor.n_rays))
@@ -59,10 +76,15 @@ def explore(
     params: WorldParams | None = None,
     sensor: RangeSensor | None = None,
     agent_radius: float = 0.3,
+    family: str = "star",
     progress: Callable[[int], None] | None = None,
 ) -> Exploration:
     """Move an agent randomly about ``n_worlds`` random worlds for ``steps`` steps each,
     among moving obstacles, recording its sensor (the paper: 100 worlds x 300 steps).
+
+    The worlds are the paper's (``family="star"``, drawn with ``params``) or any world
+    family's (:func:`copi.world.sample_world`): capabilities to be used in rooms or grid
+    maps are best learnt in such worlds, still without any task.
 
     World k draws everything from ``default_rng([seed, k])``, so the readings are the same
     whatever the number of ``workers`` (processes) and their order.
@@ -77,16 +99,17 @@ def explore(
         positive_int(value, name)
     params = params or WorldParams()
     sensor = sensor or RangeSensor()
+    check_family(family)
     parts: list[tuple[NDArray[np.float64], NDArray[np.float64]]] = []
     if workers == 1:
         for k in range(n_worlds):
-            parts.append(_explore_one(seed, k, steps, params, sensor, agent_radius))
+            parts.append(_explore_one(seed, k, steps, params, sensor, agent_radius, family))
             if progress is not None:
                 progress(k)
     else:
         with ProcessPoolExecutor(workers, mp_context=get_context("spawn")) as pool:
             futures = [
-                pool.submit(_explore_one, seed, k, steps, params, sensor, agent_radius)
+                pool.submit(_explore_one, seed, k, steps, params, sensor, agent_radius, family)
                 for k in range(n_worlds)
             ]
             for k, fut in enumerate(futures):

@@ -19,7 +19,7 @@ from copi.learning._gng import GrowingNeuralGas
 from copi.learning._policies import ActionPriors, AStarLearner, ValueIterationLearner, compass
 from copi.learning._skeleton import skeletonize
 from copi.learning._symmetry import SymmetryGroup, reduce_landmarks, ring_operators
-from copi.world import RangeSensor
+from copi.world import RangeSensor, check_family
 
 __all__ = ["LearnParams", "learn"]
 
@@ -30,6 +30,8 @@ class LearnParams:
 
     worlds: int = 100
     """Random worlds explored (paper: 100)."""
+    family: str = "star"
+    """World family explored ("star": the paper's random worlds; see copi.world)."""
     steps: int = 300
     """Random-walk steps in each world (paper: 300)."""
     seed: int = 0
@@ -65,6 +67,7 @@ class LearnParams:
     def __post_init__(self) -> None:
         for name in ("worlds", "steps", "workers", "n_rays", "epochs"):
             positive_int(getattr(self, name), name)
+        check_family(self.family)
         if self.learner not in ("astar", "value-iteration"):
             raise InvalidArgumentError(
                 f"learner must be 'astar' or 'value-iteration'; got {self.learner!r}"
@@ -101,6 +104,7 @@ def learn(params: LearnParams | None = None, *, progress: Progress | None = None
         workers=p.workers,
         sensor=sensor,
         agent_radius=p.agent_radius,
+        family=p.family,
         progress=lambda k: report("explore", k + 1, p.worlds),
     )
     stages.append(

@@ -38,8 +38,10 @@ class Decision:
     candidate_actions: NDArray[np.float64]
     """Those policies' first moves mapped back to the world by g^-1, shape (k, 2)."""
     choice: str | None
-    """The direction the global strategy picked (None: no policy here; "escape": with a
-    guard, no policy was safe and the agent moved where the reading left most room)."""
+    """The direction the global strategy picked (None: nothing could be done; "escape":
+    with a guard, no policy was safe and the agent moved where the reading left most room;
+    "compass D": the template offers no policy here, so the compass direction D, in the
+    world frame, was taken)."""
     action: NDArray[np.float64]
     """The velocity sent to the world."""
 
@@ -240,7 +242,11 @@ class ContextController:
             element=self.capabilities.group.words[g] or "id",
             candidates=[self.names[d] for d in np.flatnonzero(mask)],
             candidate_actions=cand[node][mask].copy(),
-            choice=(None if choice == -1 else "escape" if choice == -2 else self.names[choice]),
+            choice=(
+                None if choice == -1 else "escape" if choice == -2
+                else f"compass {self.names[-3 - choice]}" if choice <= -3
+                else self.names[choice]
+            ),  # fmt: skip
             action=action,
         )
 

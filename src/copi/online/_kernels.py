@@ -111,8 +111,9 @@ def _choose(  # type: ignore[no-untyped-def]
 ):
     """One decision for reading ``s`` and desired direction (wx, wy).
 
-    Writes out = (ax, ay, node, d2, choice); choice -1: no candidate; node -1: the
-    reading is not finite (nothing else is computed).
+    Writes out = (ax, ay, node, d2, choice); choice -1: no candidate; -2: the escape;
+    -3 - d: compass direction d, taken because the template offers no policy; node -1:
+    the reading is not finite (nothing else is computed).
 
     With ``guard`` > 0, a candidate is kept only if, after its step, every moving
     obstacle's hit point is at least ``guard`` away and its path passes none closer than
@@ -133,23 +134,49 @@ def _choose(  # type: ignore[no-untyped-def]
     ux = wx / norm
     uy = wy / norm
     n_dir = cand.shape[1]
+    # How near the nearest hit is now: a step is judged by whether it brings the agent
+    # nearer than that (below the threshold), not by where it stands (an agent resting
+    # against a wall could otherwise never move again).
+    now = np.inf
+    for i in range(s.shape[0]):
+        if s[i] < now:
+            now = s[i]
+    wall = min(_WALL, now - 1e-6)
+    roomy = min(0.35, now - 1e-6)
+    # A context whose template offers no policy falls back to the compass: every
+    # direction is a candidate, each kept only if its step does not run into a hit (and,
+    # with a guard, passes it). Reported as choice -3 - d.
+    compass = True
+    for d in range(n_dir):
+        if ok[node, d]:
+            compass = False
+            break
     best = -1
     best_score = -np.inf
     fallback = -1
     fallback_clear = -np.inf
     for d in range(n_dir):
-        if not ok[node, d]:
+        if compass:
+            a0 = 2.0 * math.pi * d / n_dir
+            ax = math.cos(a0)
+            ay = math.sin(a0)
+        elif ok[node, d]:
+            ax = cand[node, d, 0]
+            ay = cand[node, d, 1]
+        else:
             continue
-        ax = cand[node, d, 0]
-        ay = cand[node, d, 1]
         score = ax * ux + ay * uy
-        if guard > 0.0:
+        if guard > 0.0 or compass:
             step = _step_length(score * reach, reach)
             end, sweep, sweep_all = _room(s, static, cos, sin, max_range, ax, ay, step)
-            # A step whose path runs within _WALL of any hit (a wall included) would be
-            # stopped there: without this, a quantised direction pressed into a wall
-            # corner for good where the route hugs it.
-            if end < guard or sweep < 0.5 * guard or sweep_all < _WALL:
+            if guard <= 0.0:
+                end = np.inf
+                sweep = np.inf
+            # A step whose path runs within _WALL of any hit (a wall included), nearer
+            # than the agent already is, would be stopped there: without this, a
+            # quantised direction pressed into a wall corner for good where the route
+            # hugs it.
+            if end < guard or sweep < 0.5 * guard or sweep_all < wall:
                 if end > fallback_clear:
                     fallback_clear = end
                     fallback = d
@@ -168,7 +195,7 @@ def _choose(  # type: ignore[no-untyped-def]
             end, _, sweep_all = _room(
                 s, static, cos, sin, max_range, math.cos(a0), math.sin(a0), 1.0
             )
-            if sweep_all >= 0.35 and end > esc_clear:
+            if sweep_all >= roomy and end > esc_clear:
                 esc_clear = end
                 esc = d
         if esc >= 0:
@@ -181,12 +208,17 @@ def _choose(  # type: ignore[no-untyped-def]
         best = fallback
     if best < 0:
         return
-    ax = cand[node, best, 0]
-    ay = cand[node, best, 1]
+    if compass:
+        a0 = 2.0 * math.pi * best / n_dir
+        ax = math.cos(a0)
+        ay = math.sin(a0)
+    else:
+        ax = cand[node, best, 0]
+        ay = cand[node, best, 1]
     step = _step_length((ax * ux + ay * uy) * reach, reach)
     out[0] = ax * step
     out[1] = ay * step
-    out[4] = best
+    out[4] = -3.0 - best if compass else best
 
 
 @njit(cache=True, fastmath=FAST)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -154,6 +155,40 @@ def map_window_world(
         if world is not None:
             return world
     raise InvalidWorldError(f"no usable window found in 100 draws from {len(files)} maps")
+
+
+def scaled_map_world(
+    path: str | os.PathLike[str],
+    *,
+    passage: float = 3.0,
+    agent_radius: float = 0.3,
+    name: str | None = None,
+) -> World:
+    """A whole Moving AI map as a world for disc agents: scaled so that its narrow
+    passages are ``passage`` agent steps wide (as the ``maps`` family scales its windows),
+    keeping its largest free region, with moving obstacles sized to those passages.
+
+    One cell of a Moving AI map is one unit of its scenarios; at that scale a one-cell
+    door barely lets the agent through and no moving obstacle of the paper's size (radius
+    0.5-1.0) at all, so navigation experiments want the map scaled.
+
+    Raises
+    ------
+    InvalidWorldError
+        When the scaled map has too little room for tasks (a task needs two free points
+        10 apart).
+    """
+    if not (math.isfinite(passage) and passage > 0):
+        raise InvalidArgumentError(f"passage must be a finite number > 0; got {passage!r}")
+    m = _load(os.fspath(path))
+    scale = passage / m.passage_cells
+    world = _window(m, 0, 0, m.width, m.height, scale, agent_radius, name or m.name)
+    if world is None:
+        raise InvalidWorldError(
+            f"{path}: scaled so that its passages are {passage:g} wide, the map leaves too "
+            "little room for tasks (try a larger --passage)"
+        )
+    return world
 
 
 def _window(

@@ -92,7 +92,7 @@ METHODS: dict[str, MethodSpec] = {
             "compass-guard", "sensor", _MAP_AND_SENSOR,
             "copi-extended's hand-written guard over 16 compass moves, no capabilities "
             "(ablation of the learnt part)",
-            {"guard": 0.9},
+            {"guard": 1.05},
         ),
         MethodSpec(
             "vfh", "sensor", _MAP_AND_SENSOR,

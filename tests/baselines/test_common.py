@@ -70,23 +70,24 @@ def test_avoiding_methods_pass_a_standing_disc_in_the_way(name, level, y, radius
 @pytest.mark.parametrize("level", ["sensor", "map"])
 @pytest.mark.parametrize("name", ["compass-guard", "vfh"])
 def test_guard_and_vfh_dodge_a_disc_coming_head_on(name, level, x, y):
-    # The guard at 1.2, its design value (agent radius + an obstacle's step + a margin).
-    # The tuned 0.9 (chosen for success over all five families on validation episodes)
-    # passes it closer than 0.2 in 6 of these 8 cases: see the next test.
-    params = {"guard": 1.2} if name == "compass-guard" else {}
+    # compass-guard at its tuned guard (1.05, chosen on validation episodes).
+    params: dict = {}
     sim = head_on(x, y)
     res = run(name, sim, level, max_steps=60, **params)
     assert res.outcome == "success"
     assert res.min_clearance > 0.2
 
 
-def test_the_tuned_guard_trades_head_on_margin_for_reach():
-    cases = [(x, y, lv) for x, y in [(12.0, 10.0), (16.0, 10.0), (12.0, 10.2), (16.0, 9.8)]
-             for lv in ("sensor", "map")]  # fmt: skip
-    runs = {c: run("compass-guard", head_on(c[0], c[1]), c[2], max_steps=60) for c in cases}
-    assert all(r.outcome == "success" for r in runs.values())
-    close = sorted({(x, y) for (x, y, _), r in runs.items() if r.min_clearance <= 0.2})
-    assert close == [(12.0, 10.0), (12.0, 10.2), (16.0, 10.0)]  # at both levels
+def test_a_smaller_guard_passes_closer():
+    # 0.9, the value tuned before the guard stopped refusing every step next to a wall,
+    # passes these discs closer than 0.2 where 1.05 keeps 0.32 or more.
+    cases = [(12.0, 10.0), (16.0, 10.0), (12.0, 10.2), (16.0, 9.8)]
+    tuned = [run("compass-guard", head_on(x, y), "map", max_steps=60) for x, y in cases]
+    small = [run("compass-guard", head_on(x, y), "map", max_steps=60, guard=0.9)
+             for x, y in cases]  # fmt: skip
+    assert all(r.outcome == "success" for r in tuned + small)
+    assert min(r.min_clearance for r in tuned) >= 0.3
+    assert sum(r.min_clearance <= 0.2 for r in small) == 3
 
 
 @pytest.mark.parametrize("x, y", [(12.0, 10.0), (16.0, 10.0), (12.0, 10.2), (16.0, 9.8)])

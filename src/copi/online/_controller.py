@@ -157,6 +157,14 @@ class ContextController:
             )
         return st
 
+    def _static_shape(self, static: Any) -> NDArray[np.float64]:
+        """One static reading as floats of the ray count (its values are checked in the
+        compiled chain)."""
+        st = _floats(static, "static")
+        if st.shape != (self.n_rays,):
+            raise InvalidArgumentError(f"static must have shape ({self.n_rays},); got {st.shape}")
+        return st
+
     def _check(self, ranges: Any) -> NDArray[np.float64]:
         """Readings as floats with the capabilities' ray count (finiteness is checked in
         the compiled chain)."""
@@ -197,8 +205,6 @@ class ContextController:
             raise InvalidArgumentError(
                 f"a reading must have shape ({self.n_rays},) (as the capabilities); got {s.shape}"
             )
-        if not (s >= 0).all():
-            raise InvalidArgumentError(f"readings must be finite ranges >= 0; got {s.tolist()}")
         want = _floats(desired, "desired")
         if want.shape != (2,) or not (math.isfinite(want[0]) and math.isfinite(want[1])):
             raise InvalidArgumentError(
@@ -207,13 +213,17 @@ class ContextController:
         reach = _reach(reach)
         out = self._out
         nodes, cand, ok = self._nodes, self._cand, self._ok
-        st = self._no_static if static is None else self._static(static, (self.n_rays,))
+        st = self._no_static if static is None else self._static_shape(static)
         _kernels.decide(
             s, st, nodes, cand, ok, want[0], want[1], reach, self.guard,
             self._cos, self._sin, self.max_range, out,
         )  # fmt: skip
-        if out[2] < 0:
-            raise InvalidArgumentError(f"readings must be finite; got {s.tolist()}")
+        if out[2] == -1.0:
+            raise InvalidArgumentError(f"readings must be finite ranges >= 0; got {s.tolist()}")
+        if out[2] == -2.0:
+            raise InvalidArgumentError(
+                "static readings must be ranges >= 0 (NaN or negative found)"
+            )
         self.n_decisions += 1
         dist = math.sqrt(out[3])
         unfamiliar = dist > self.threshold

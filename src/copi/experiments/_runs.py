@@ -9,13 +9,13 @@ import json
 import os
 from collections.abc import Callable, Iterator
 from concurrent.futures import as_completed
-from contextlib import contextmanager
+from contextlib import AbstractContextManager, contextmanager
 from typing import Any
 
 from copi.errors import Interrupted
 from copi.learning import Capabilities
 
-__all__ = ["RunIdentity", "run_into_store", "stops_cleanly"]
+__all__ = ["RunIdentity", "execute", "run_into_store", "stops_cleanly"]
 
 
 class Tally:
@@ -113,6 +113,44 @@ class RunIdentity:
         return hashlib.sha256(json.dumps(self.identity(), sort_keys=True).encode()).hexdigest()[:16]
 
 
+def execute(
+    config: Any,
+    items: list[Any],
+    *,
+    one: Callable[[Any, Any], list[Any]],
+    many: Callable[[Any, list[Any]], list[Any]],
+    commit: Callable[[list[Any]], None],
+    workers: int,
+    scheduler: str | None,
+    chunk: int,
+    stopping: AbstractContextManager[Any],
+) -> None:
+    """Run every item and hand its results to ``commit`` as they come back: in this
+    process one item at a time (``one(config, item)``), or on a local pool or a Dask
+    cluster in chunks of at most ``chunk`` (``many(config, items)``, which must pickle).
+    On any exception the chunks not started are cancelled; ``stopping`` wraps the whole
+    (e.g. the one-line Ctrl-C message)."""
+    from copi.experiments.executor import InlineExecutor, make_executor
+
+    with stopping, make_executor(workers, scheduler) as pool:
+        if isinstance(pool, InlineExecutor):
+            for item in items:
+                commit(one(config, item))
+            return
+        n_workers = workers if scheduler is None else 4
+        size = max(1, min(chunk, len(items) // (4 * n_workers)))
+        futures = [
+            pool.submit(many, config, items[i : i + size]) for i in range(0, len(items), size)
+        ]
+        try:
+            for fut in as_completed(futures):
+                commit(fut.result())
+        except BaseException:
+            for fut in futures:
+                fut.cancel()
+            raise
+
+
 def run_into_store(
     config: Any,
     output: str | os.PathLike[str],
@@ -134,7 +172,6 @@ def run_into_store(
     In-process, one item runs and is committed at a time; with a pool or a Dask cluster,
     items go out in chunks of at most ``chunk`` and are committed as each chunk returns.
     """
-    from copi.experiments.executor import InlineExecutor, make_executor
     from copi.experiments.store import ResultsStore
 
     run_id = config.run_id()
@@ -155,27 +192,13 @@ def run_into_store(
 
         if not todo:
             return run_id
+
         def saved() -> int:
             return len(store.done(run_id, method, table))
 
-        with (
-            stops_cleanly(tally, output, table, saved),
-            make_executor(workers, scheduler) as pool,
-        ):
-            if isinstance(pool, InlineExecutor):
-                for k in todo:
-                    commit([one(config, k)])
-                return run_id
-            n_workers = workers if scheduler is None else 4
-            size = max(1, min(chunk, len(todo) // (4 * n_workers)))
-            futures = [
-                pool.submit(many, config, todo[i : i + size]) for i in range(0, len(todo), size)
-            ]
-            try:
-                for fut in as_completed(futures):
-                    commit(fut.result())
-            except BaseException:
-                for f in futures:
-                    f.cancel()
-                raise
+        execute(
+            config, todo, one=lambda c, k: [one(c, k)], many=many, commit=commit,
+            workers=workers, scheduler=scheduler, chunk=chunk,
+            stopping=stops_cleanly(tally, output, table, saved),
+        )  # fmt: skip
     return run_id

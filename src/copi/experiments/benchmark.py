@@ -17,7 +17,6 @@ import json
 import math
 import os
 from collections.abc import Callable
-from concurrent.futures import as_completed
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
@@ -25,7 +24,7 @@ from typing import Any
 
 from copi.errors import InvalidArgumentError, InvalidWorldError
 from copi.experiments._episode import optimal_to_goal, run_agent
-from copi.experiments._runs import Tally, code_version, file_sha, stops_cleanly
+from copi.experiments._runs import Tally, code_version, execute, file_sha, stops_cleanly
 from copi.experiments.methods import (
     CAPABILITY_PRESETS,
     make_agent,
@@ -229,7 +228,6 @@ def run_benchmark(
 ) -> dict[tuple[str, str, str], str]:
     """Run (or resume) the benchmark into the results file ``output``; returns the run id
     of each (family, method, level)."""
-    from copi.experiments.executor import InlineExecutor, make_executor
     from copi.experiments.store import ResultsStore
 
     config = config.resolved()
@@ -262,28 +260,13 @@ def run_benchmark(
 
         if not items:
             return runs
+
         def saved() -> int:
             return sum(len(store.done(rid, m)) for (_, m, _), rid in runs.items())
 
-        with (
-            stops_cleanly(tally, output, "episodes", saved),
-            make_executor(workers, scheduler) as pool,
-        ):
-            if isinstance(pool, InlineExecutor):
-                for f, k, todo in items:
-                    commit(run_item(config, f, k, todo))
-                return runs
-            n_workers = workers if scheduler is None else 4
-            size = max(1, min(8, len(items) // (4 * n_workers)))
-            futures = [
-                pool.submit(run_items, config, items[i : i + size])
-                for i in range(0, len(items), size)
-            ]
-            try:
-                for fut in as_completed(futures):
-                    commit(fut.result())
-            except BaseException:
-                for fut in futures:
-                    fut.cancel()
-                raise
+        execute(
+            config, items, one=lambda c, item: run_item(c, *item), many=run_items,
+            commit=commit, workers=workers, scheduler=scheduler, chunk=8,
+            stopping=stops_cleanly(tally, output, "episodes", saved),
+        )  # fmt: skip
     return runs

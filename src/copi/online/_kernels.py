@@ -184,7 +184,8 @@ def _choose(  # type: ignore[no-untyped-def]
             # quantised direction pressed into a wall corner for good where the route
             # hugs it.
             if end < guard or sweep < 0.5 * guard or sweep_all < wall:
-                if end > fallback_clear:
+                # a fallback may come near a moving obstacle, never run into a hit
+                if sweep_all >= wall and end > fallback_clear:
                     fallback_clear = end
                     fallback = d
                 continue

@@ -29,7 +29,7 @@ def main() -> bool:
     caps_paths = ensure_capabilities(Path(tempfile.mkdtemp()), {"faithful", "extended"})
     caps = {k: Capabilities.load(v) for k, v in caps_paths.items()}
     episodes = [draw_episode("polygon", k, 3) for k in range(20)]
-    limits = [benchmark_max_steps(optimal_to_goal(sim.world, sim)) for sim in episodes]
+    limits = [benchmark_max_steps(optimal_to_goal(sim)) for sim in episodes]
     rows = []
     for name, spec in METHODS.items():
         if not spec.available:

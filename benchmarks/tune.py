@@ -57,7 +57,7 @@ CAPS: dict[str, str] = {}
 def _episode(args: tuple[str, int]) -> list[tuple[str, int, str, float]]:
     family, k = args
     base = draw_episode(family, k, SEED)
-    optimal = optimal_to_goal(base.world, base)
+    optimal = optimal_to_goal(base)
     steps = benchmark_max_steps(optimal)
     out = []
     for method, settings in GRID.items():

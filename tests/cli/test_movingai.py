@@ -7,19 +7,9 @@ from pathlib import Path
 
 import pytest
 
-from copi.cli.main import main
+from tests.cli.test_main import run
 
 ROOM = Path(__file__).resolve().parents[2].parent / "shared/data/movingai/mapf/room-32-32-4.map"
-
-
-def _run(args: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, str]:
-    try:
-        main(args)
-        code = 0
-    except SystemExit as exc:
-        code = int(exc.code or 0)
-    cap = capsys.readouterr()
-    return code, cap.out, cap.err
 
 
 @pytest.mark.skipif(not ROOM.exists(), reason="the shared Moving AI data is not beside the project")
@@ -29,7 +19,7 @@ def test_a_moving_ai_map_scaled_for_disc_agents(
     import json
 
     room = tmp_path / "room.json"
-    code, out, err = _run(
+    code, out, err = run(
         ["world", "import-movingai", str(ROOM), "-o", str(room), "--passage", "3"], capsys
     )
     assert code == 0, err
@@ -37,7 +27,7 @@ def test_a_moving_ai_map_scaled_for_disc_agents(
     world = world[0] if isinstance(world, list) else world
     # one-cell doors are 3 steps wide now, and the moving obstacles fit them
     assert world["obstacles"]["radius"][1] <= 0.3 * 3 + 1e-9
-    code, out, err = _run(
+    code, out, err = run(
         ["evaluate", "-o", str(tmp_path / "r.sqlite"), "--method", "compass-guard",
          "--world-file", str(room), "--worlds", "6", "--max-steps", "300"],
         capsys,
@@ -45,7 +35,7 @@ def test_a_moving_ai_map_scaled_for_disc_agents(
     assert code == 0, err
     assert float(out.split("success ")[1].split(" %")[0]) > 0, out
     assert "standing still 0.0 %" in out
-    code, _, err = _run(
+    code, _, err = run(
         ["world", "import-movingai", str(ROOM), "-o", str(tmp_path / "x.json"), "--passage",
          "3", "--near", "1", "1"],
         capsys,

@@ -6,12 +6,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from copi.cli.main import main
 from copi.experiments.benchmark import BenchmarkConfig, benchmark_max_steps, run_benchmark
 from copi.experiments.benchmark_report import paired_difference, write_benchmark_report
 from copi.experiments.methods import parse_methods
 from copi.experiments.store import ResultsStore
 from copi.learning import LearnParams, learn
+from tests.cli.test_main import run
 
 TIMINGS = {"decision_us", "strategy_us"}
 
@@ -117,16 +117,6 @@ def test_every_method_meets_the_same_episodes_and_runs_resume(
     assert (tmp_path / "rep" / "benchmark_success_excess.png").stat().st_size > 10_000
 
 
-def _cli(args: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, str]:
-    try:
-        main(args)
-        code = 0
-    except SystemExit as exc:
-        code = int(exc.code or 0)
-    cap = capsys.readouterr()
-    return code, cap.out, cap.err
-
-
 @pytest.mark.parametrize(
     ("args", "message"),
     [
@@ -140,7 +130,7 @@ def _cli(args: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str,
 def test_benchmark_bad_input_writes_nothing(
     args: list[str], message: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    code, _, err = _cli(["benchmark", "-o", str(tmp_path / "b"), *args], capsys)
+    code, _, err = run(["benchmark", "-o", str(tmp_path / "b"), *args], capsys)
     assert code == 2 and message in err and "Traceback" not in err, err
     assert not (tmp_path / "b").exists()
 
@@ -152,12 +142,12 @@ def test_benchmark_without_navground(
 
     monkeypatch.setitem(sys.modules, "navground", None)
     monkeypatch.setitem(sys.modules, "navground.core", None)
-    code, _, err = _cli(
+    code, _, err = run(
         ["benchmark", "-o", str(tmp_path / "b"), "--methods", "navground-hl"], capsys
     )
     assert code == 2 and "navground-hl needs navground, which is not installed" in err
     assert not (tmp_path / "b").exists()
-    code, out, err = _cli(
+    code, out, err = run(
         ["benchmark", "-o", str(tmp_path / "c"), "--methods", "straight@map,dwa@map",
          "--families", "star", "--episodes", "2", "--workers", "1"],
         capsys,

@@ -10,7 +10,7 @@ from numpy.typing import NDArray
 
 from copi.baselines._common import Steered, segment_distance, unit
 from copi.errors import InvalidArgumentError
-from copi.online import Observation, Task
+from copi.online import Observation
 
 __all__ = ["DWA"]
 
@@ -62,9 +62,6 @@ class DWA(Steered):
         a = 2 * np.pi * np.arange(int(headings)) / int(headings)
         self._dirs = np.column_stack([np.cos(a), np.sin(a)])
         self._speeds = np.array([0.25, 0.5, 0.75, 1.0])
-
-    def reset(self, task: Task) -> None:
-        super().reset(task)
 
     def steer(
         self, obs: Observation, desired: NDArray[np.float64], reach: float

@@ -13,13 +13,9 @@ import numpy as np
 from copi.errors import CopiError
 from copi.online import Agent, Observation, Task, check_sensing
 from copi.planning import length_error_bound, shortest_path
-from copi.world import Simulator, World
+from copi.world import Simulator
 
 __all__ = ["EpisodeOutcome", "optimal_to_goal", "run_agent"]
-
-OUTCOMES = ("success", "collision", "timeout")
-"""The exclusive outcomes of an episode."""
-
 
 @dataclass(frozen=True)
 class EpisodeOutcome:
@@ -50,9 +46,7 @@ class EpisodeOutcome:
     """Method-specific diagnostics (e.g. copi's unfamiliar rate)."""
 
 
-def optimal_to_goal(
-    world: World, sim: Simulator, *, quad_segs: int = 16
-) -> float:
+def optimal_to_goal(sim: Simulator, *, quad_segs: int = 16) -> float:
     """A lower bound, within 0.12 %, on the shortest path from the start to the goal's
     tolerance disc on the snapshot at t = 0 with obstacles frozen (paper §IV).
 
@@ -64,7 +58,7 @@ def optimal_to_goal(
     """
     try:
         length = shortest_path(
-            world, sim.position, sim.goal, radius=sim.agent_radius, centers=sim.centers,
+            sim.world, sim.position, sim.goal, radius=sim.agent_radius, centers=sim.centers,
             radii=sim.radii, quad_segs=quad_segs,
         ).length  # fmt: skip
     except CopiError:

@@ -18,7 +18,6 @@ import math
 import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
@@ -33,6 +32,7 @@ from copi.experiments.methods import (
 )
 from copi.experiments.navigation import (
     EpisodeResult,
+    _capabilities,
     draw_episode,
     episode_world_name,
     result_row,
@@ -132,12 +132,6 @@ class BenchmarkConfig:
         return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
-@lru_cache(maxsize=4)
-def _caps(path: str, sha: str) -> Capabilities:
-    del sha  # part of the cache key
-    return Capabilities.load(path)
-
-
 def run_item(
     config: BenchmarkConfig, family: str, k: int, todo: list[tuple[str, str, str]]
 ) -> list[tuple[str, str, EpisodeResult]]:
@@ -150,14 +144,16 @@ def run_item(
             (rid, m, skipped_row(k, config.seed, name, str(exc), family=family, sensing=level))
             for rid, m, level in todo
         ]
-    optimal = optimal_to_goal(base.world, base)
+    optimal = optimal_to_goal(base)
     max_steps = benchmark_max_steps(optimal)
     out = []
     for run_id, method, level in todo:
         preset = method_spec(method).capabilities
         caps = None
         if preset is not None:
-            caps = _caps(config.capabilities[preset], config.capabilities_sha.get(preset, ""))
+            caps = _capabilities(
+                config.capabilities[preset], config.capabilities_sha.get(preset, "")
+            )
         sim = copy.deepcopy(base)
         agent = make_agent(method, caps)
         res = run_agent(

@@ -296,7 +296,7 @@ def run_episode(config: NavigationConfig, k: int) -> EpisodeResult:
         return skipped_row(
             k, config.seed, name, str(exc), family=config.family, sensing=config.sensing
         )
-    optimal = optimal_to_goal(sim.world, sim)
+    optimal = optimal_to_goal(sim)
     agent = make_agent(config.method, caps, **config.agent_params())
     out = run_agent(
         agent, sim, sensing=config.sensing, max_steps=config.max_steps,

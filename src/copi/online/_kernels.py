@@ -141,15 +141,6 @@ def _choose(  # type: ignore[no-untyped-def]
     ux = wx / norm
     uy = wy / norm
     n_dir = cand.shape[1]
-    # How near the nearest hit is now: a step is judged by whether it brings the agent
-    # nearer than that (below the threshold), not by where it stands (an agent resting
-    # against a wall could otherwise never move again).
-    now = np.inf
-    for i in range(s.shape[0]):
-        if s[i] < now:
-            now = s[i]
-    wall = min(_WALL, now - 1e-6)
-    roomy = min(0.35, now - 1e-6)
     # A context whose template offers no policy falls back to the compass: every
     # direction is a candidate, each kept only if its step does not run into a hit (and,
     # with a guard, passes it). Reported as choice -3 - d.
@@ -158,6 +149,19 @@ def _choose(  # type: ignore[no-untyped-def]
         if ok[node, d]:
             compass = False
             break
+    # How near the nearest hit is now: a step is judged by whether it brings the agent
+    # nearer than that (below the threshold), not by where it stands (an agent resting
+    # against a wall could otherwise never move again). Only needed when steps are
+    # checked against the hits (a guard, or the compass fallback).
+    wall = _WALL
+    roomy = 0.35
+    if guard > 0.0 or compass:
+        now = np.inf
+        for i in range(s.shape[0]):
+            if s[i] < now:
+                now = s[i]
+        wall = min(_WALL, now - 1e-6)
+        roomy = min(0.35, now - 1e-6)
     best = -1
     best_score = -np.inf
     fallback = -1

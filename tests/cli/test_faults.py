@@ -139,8 +139,10 @@ def _wait_for_rows(path: Path, n: int, proc: subprocess.Popen[str], timeout: flo
 
 @pytest.mark.parametrize("workers", ["1", "2"])
 def test_ctrl_c_stops_cleanly_and_says_how_to_resume(tmp_path: Path, workers: str) -> None:
+    # Far more episodes than run before the signal (400 take ~4 s on 2 workers, so the
+    # resumed run could finish, or be shutting down, when the signal came).
     out = tmp_path / "run.sqlite"
-    args = ["evaluate", "--method", "compass-guard", "--worlds", "400", "--max-steps", "200",
+    args = ["evaluate", "--method", "compass-guard", "--worlds", "20000", "--max-steps", "200",
             "-o", str(out), "--workers", workers]  # fmt: skip
     proc = _start(args, tmp_path)
     _wait_for_rows(out, 3, proc)
@@ -152,14 +154,14 @@ def test_ctrl_c_stops_cleanly_and_says_how_to_resume(tmp_path: Path, workers: st
     with closing(sqlite3.connect(out)) as db:
         saved = db.execute("SELECT COUNT(*) FROM episodes").fetchone()[0]
     assert lines[0] == (
-        f"copi: interrupted: {saved}/400 episodes saved in {out}; rerun the same command to resume"
+        f"copi: interrupted: {saved}/20000 episodes saved in {out}; rerun the same command to resume"
     )
     again = _start(args, tmp_path)
     _wait_for_rows(out, saved + 1, again)
     again.send_signal(signal.SIGINT)
     _, err = again.communicate(timeout=60)
-    assert f"copi: resuming: {saved}/400 episodes already done in {out}" in err
-    assert again.returncode == 130
+    assert f"copi: resuming: {saved}/20000 episodes already done in {out}" in err
+    assert again.returncode == 130, err
 
 
 WORKERS_SCRIPT = textwrap.dedent(

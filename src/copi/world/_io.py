@@ -100,8 +100,44 @@ def save_worlds(worlds: World | Iterable[World], path: str | os.PathLike[str]) -
     p = Path(path)
     if p.parent and not p.parent.exists():
         raise WorldFileError(f"{p}: directory {p.parent} does not exist")
-    text = json.dumps([w.to_dict() for w in items], indent=1) + "\n"
+    text = _compact([w.to_dict() for w in items]) + "\n"
     atomic_write(p, lambda fh: fh.write(text.encode("utf-8")))
+
+
+def _compact(value: Any, depth: int = 0, width: int = 96) -> str:
+    """JSON for people: objects a key per line, a list of numbers on one line, a list of
+    points as many points per line as fit in ``width`` (not one number per line)."""
+    pad = " " * (depth + 1)
+    if isinstance(value, dict):
+        if not value:
+            return "{}"
+        body = ",\n".join(
+            f"{pad}{json.dumps(k)}: {_compact(v, depth + 1, width)}" for k, v in value.items()
+        )
+        return "{\n" + body + "\n" + " " * depth + "}"
+    if isinstance(value, list) and value and not all(_flat(v) for v in value):
+        body = ",\n".join(pad + _compact(v, depth + 1, width) for v in value)
+        return "[\n" + body + "\n" + " " * depth + "]"
+    if isinstance(value, list) and value and all(isinstance(v, list) for v in value):
+        parts = [json.dumps(v, separators=(", ", ": ")) for v in value]
+        lines, line = [], ""
+        for part in parts:
+            if line and len(pad) + len(line) + len(part) + 2 > width:
+                lines.append(line + ",")
+                line = ""
+            line = f"{line}, {part}" if line else part
+        lines.append(line)
+        if len(lines) == 1:
+            return f"[{lines[0]}]"
+        return "[\n" + "\n".join(pad + ln for ln in lines) + "\n" + " " * depth + "]"
+    return json.dumps(value, separators=(", ", ": "))
+
+
+def _flat(v: Any) -> bool:
+    """A number, a string, or a list of numbers (a point): what fits on a line."""
+    if isinstance(v, list):
+        return all(isinstance(x, int | float) and not isinstance(x, bool) for x in v)
+    return not isinstance(v, dict)
 
 
 class _Node:

@@ -1,6 +1,7 @@
 # copi: `make run` reproduces, `make test` checks, `make bench` measures.
 # Each target creates .venv and installs copi with what it needs on first use; later runs
-# reuse it (the install is redone only when pyproject.toml changes).
+# reuse it (the install is redone only when pyproject.toml changes). The install ends by
+# compiling copi's numba kernels once (about 30 s), so that no later command waits for them.
 
 PYTHON ?= $(shell command -v python3.11 2>/dev/null || command -v python3)
 VENV := .venv
@@ -21,6 +22,7 @@ $(STAMP): pyproject.toml
 	$(BIN)/python -m pip install --quiet -e '.[dev]'
 	$(BIN)/python -m pip install --quiet -e '.[dev,peers]' || \
 		echo "make: navground could not be installed: the benchmark leaves its peers out"
+	$(BIN)/python -m copi._warmup
 	touch $(STAMP)
 
 # The paper's Experiment 1 end to end (learn, 1549 dynamic worlds in two modes, report),

@@ -1,6 +1,7 @@
 from __future__ import annotations
 
 import json
+import sqlite3
 import subprocess
 import sys
 from pathlib import Path
@@ -187,14 +188,17 @@ def test_evaluate_report_and_bad_inputs(tmp_path: Path, capsys: pytest.CaptureFi
     assert not (tmp_path / "b.sqlite").exists()
     for bad, message in [
         (["--method", "astar"], "method must be one of copi-faithful, copi-extended, straight"),
-        (["--sensing", "psychic"], "sensing level must be one of sensor, map, oracle; got 'psychic'"),
-        (["--method", "replan", "--sensing", "map"],
-         "replan needs sensing level 'oracle' or above; asked to run at 'map'"),
+        (
+            ["--sensing", "psychic"],
+            "sensing level must be one of sensor, map, oracle; got 'psychic'",
+        ),
+        (
+            ["--method", "replan", "--sensing", "map"],
+            "replan needs sensing level 'oracle' or above; asked to run at 'map'",
+        ),
         (["--family", "moon"], "family must be one of"),
     ]:
-        code, _, err = run(
-            ["evaluate", str(caps), "-o", str(tmp_path / "x.sqlite"), *bad], capsys
-        )
+        code, _, err = run(["evaluate", str(caps), "-o", str(tmp_path / "x.sqlite"), *bad], capsys)
         assert code == 2 and message in err and "Traceback" not in err, err
         assert not (tmp_path / "x.sqlite").exists()
     code, _, err = run(["evaluate", "-o", str(tmp_path / "y.sqlite")], capsys)
@@ -222,3 +226,63 @@ def test_pursuit_command(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> 
     assert code == 0 and "capability-static: 3 games" in out, err
     code, _, err = run(["pursuit", str(caps), "-o", str(results), "--evader", "ghost"], capsys)
     assert code == 2 and "evader must be 'capability' or 'game'" in err and "Traceback" not in err
+
+
+def test_presets_set_a_mode_whole(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    caps = tmp_path / "ext.npz"
+    code, _, err = run(["learn", "-o", str(caps), "--worlds", "6", "--steps", "120",
+                        "--preset", "extended"], capsys)  # fmt: skip
+    assert code == 0, err
+    code, out, _ = run(["inspect", str(caps), "--json"], capsys)
+    assert json.loads(out)["params"]["directions"] == 16
+    results = tmp_path / "r.sqlite"
+    code, out, err = run(["evaluate", str(caps), "-o", str(results), "--worlds", "2",
+                          "--max-steps", "80", "--preset", "extended"], capsys)  # fmt: skip
+    assert code == 0 and "copi-extended (map): 2 episodes" in out, err
+    with sqlite3.connect(results) as db:
+        config = json.loads(db.execute("SELECT config FROM runs").fetchone()[0])
+    assert config["method"] == "copi-extended" and config["guard"] is None  # the method's
+    from copi.experiments.methods import METHODS
+
+    assert METHODS["copi-extended"].params["guard"] == 1.2
+    code, out, err = run(["pursuit", str(caps), "-o", str(tmp_path / "g.sqlite"), "--games",
+                          "1", "--horizon", "20", "--preset", "extended"], capsys)  # fmt: skip
+    assert code == 0 and "1 games" in out, err
+    faithful = tmp_path / "f.npz"
+    run(["learn", "-o", str(faithful), "--worlds", "6", "--steps", "120"], capsys)
+    for args, message in [
+        (["learn", "-o", str(tmp_path / "z.npz"), "--preset", "extended", "--directions", "4"],
+         "--directions 4 contradicts --preset extended (16 directions)"),
+        (["learn", "-o", str(tmp_path / "z.npz"), "--preset", "fancy"],
+         "preset must be one of faithful, extended"),
+        (["evaluate", str(faithful), "-o", str(tmp_path / "z.sqlite"), "--preset", "extended"],
+         f"{faithful} was learnt with 4 directions; preset extended needs 16: learn it with "
+         "copi learn --preset extended"),
+        (["evaluate", str(caps), "-o", str(tmp_path / "z.sqlite"), "--preset", "extended",
+          "--method", "dwa"], "--method dwa contradicts --preset extended (copi-extended)"),
+        (["pursuit", str(caps), "-o", str(tmp_path / "z.sqlite"), "--preset", "faithful"],
+         "was learnt with 16 directions; preset faithful needs 4"),
+    ]:  # fmt: skip
+        code, _, err = run(args, capsys)
+        assert code == 2 and message in " ".join(err.split()), err
+        assert not (tmp_path / "z.npz").exists() and not (tmp_path / "z.sqlite").exists()
+
+
+def test_reproduce_into_a_directory_of_another_run_says_what_to_do(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch
+) -> None:
+    import copi.cli.experiments as commands
+    from copi.experiments.store import ResultsStore
+
+    def clash(output: Path, quick: bool, workers: int, seed: int) -> None:
+        with ResultsStore(output / "experiment1.sqlite") as store:  # as a --quick run left it
+            store.begin("a", "navigation", "copi-faithful", {"worlds": 100})
+            store.begin("b", "navigation", "copi-faithful", {"worlds": 1549})
+
+    monkeypatch.setattr(commands, "_reproduce", clash)
+    code, _, err = run(["reproduce", "-o", str(tmp_path / "res")], capsys)
+    assert code == 2, err
+    assert " ".join(err.split()) == (
+        f"copi: error: {tmp_path / 'res'} holds results of a --quick run or of other settings; "
+        f"reproduce into another directory (-o), or delete {tmp_path / 'res'} to start over"
+    )

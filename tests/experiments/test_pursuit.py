@@ -73,4 +73,8 @@ def test_runner_store_and_fig5(caps_path: str, tmp_path: Path) -> None:
     report = write_report([out], tmp_path / "rep")
     text = report.read_text()
     assert "Experiment 2" in text and "capability-static" in text
+    provenance = [ln for ln in text.splitlines() if ln.startswith("- **capability-")]
+    assert len(provenance) == 2 and all("4 games, seed 0, evader capability" in ln
+                                        for ln in provenance)  # fmt: skip
+    assert "stationary obstacles, horizon 100, guard 1.2" in provenance[0]
     assert (tmp_path / "rep" / "fig5_pursuit.png").exists()

@@ -42,6 +42,13 @@ def test_round_trip(tmp_path: Path, seeds: list[int], with_task: bool, spec) -> 
     assert all(len(ln) <= 120 for ln in lines)
     assert not any(ln.strip().rstrip(",").replace(".", "").lstrip("-").isdigit() for ln in lines)
     assert len(lines) < 20 * len(worlds) + sum(len(w.boundary) for w in worlds) // 3
+    text = (tmp_path / "w.json").read_text()
+    assert json.loads(text) == [w.to_dict() for w in worlds]
+    # compact: points stay whole on a line, lines stay short, no line is a lone number
+    lines = text.splitlines()
+    assert all(len(ln) <= 120 for ln in lines)
+    assert not any(ln.strip().rstrip(",").replace(".", "").lstrip("-").isdigit() for ln in lines)
+    assert len(lines) < 20 * len(worlds) + sum(len(w.boundary) for w in worlds) // 3
 
 
 def test_the_design_example_loads(tmp_path: Path) -> None:

@@ -11,6 +11,11 @@ import typer
 from copi.cli._common import _with_progress, app, console, out, progress
 from copi.errors import CopiError
 
+_SCHEDULER_HELP = (
+    "Dask scheduler tcp://HOST:PORT instead; its workers must read the input files "
+    "(capabilities, worlds) at the same paths."
+)
+
 
 def _resuming(
     report: Callable[[int, int], None], output: Path, unit: str
@@ -40,21 +45,22 @@ def evaluate_command(
         Path | None, typer.Option("-o", "--output", help="Results file (SQLite).")
     ] = None,
     method: Annotated[
-        str, typer.Option("--method", help="copi-faithful, copi-extended or a baseline.")
-    ] = "copi-faithful",
+        str | None,
+        typer.Option("--method", help="copi-faithful (default), copi-extended or a baseline."),
+    ] = None,
+    preset: Annotated[
+        str | None,
+        typer.Option("--preset", help="copi's mode: faithful or extended (method and guard)."),
+    ] = None,
     worlds: Annotated[int, typer.Option("--worlds", min=1, help="Episodes (paper: 1549).")] = 1549,
     family: Annotated[str, typer.Option("--family", help="World family.")] = "star",
-    sensing: Annotated[
-        str, typer.Option("--sensing", help="sensor, map or oracle.")
-    ] = "map",
+    sensing: Annotated[str, typer.Option("--sensing", help="sensor, map or oracle.")] = "map",
     world_file: Annotated[
         Path | None, typer.Option("--world-file", help="Run these worlds instead of a family.")
     ] = None,
     seed: Annotated[int, typer.Option("--seed", min=0, help="Seed of the episodes.")] = 0,
     workers: Annotated[int, typer.Option("--workers", min=1, help="Local processes.")] = 1,
-    scheduler: Annotated[
-        str | None, typer.Option("--scheduler", help="Dask scheduler tcp://HOST:PORT instead.")
-    ] = None,
+    scheduler: Annotated[str | None, typer.Option("--scheduler", help=_SCHEDULER_HELP)] = None,
     max_steps: Annotated[int, typer.Option("--max-steps", min=1, help="Step limit.")] = 1000,
     guard: Annotated[
         float | None,
@@ -85,6 +91,7 @@ def evaluate_command(
 
     if output is None:
         raise CopiError("evaluate needs -o/--output: the results file to write")
+    method = _preset_method(preset, method, capabilities)
     if world_file is not None:
         from copi.world import load_worlds
 
@@ -108,7 +115,10 @@ def evaluate_command(
         f"{method}: episodes",
         worlds,
         lambda report: evaluate(
-            config, output, workers=workers, scheduler=scheduler,
+            config,
+            output,
+            workers=workers,
+            scheduler=scheduler,
             progress=_resuming(report, output, "episodes"),
         ),  # fmt: skip
     )
@@ -131,6 +141,25 @@ def evaluate_command(
         console.print(f"copi: warning: {w}", highlight=False, markup=False)
 
 
+def _preset_method(preset: str | None, method: str | None, capabilities: Path | None) -> str:
+    """The method a ``--preset`` stands for (checked against ``--method`` and against how
+    the capabilities file was learnt); without a preset, ``method`` or copi-faithful."""
+    from copi.errors import InvalidArgumentError
+    from copi.experiments.methods import check_preset_capabilities
+    from copi.experiments.methods import preset as get_preset
+
+    if preset is None:
+        return method or "copi-faithful"
+    p = get_preset(preset)
+    if method is not None and method != p.method:
+        raise InvalidArgumentError(f"--method {method} contradicts --preset {preset} ({p.method})")
+    if capabilities is not None:
+        from copi.learning import Capabilities
+
+        check_preset_capabilities(preset, Capabilities.load(capabilities), str(capabilities))
+    return p.method
+
+
 @app.command("benchmark")
 def benchmark_command(
     output: Annotated[Path, typer.Option("-o", "--output", help="Directory for everything.")],
@@ -149,9 +178,7 @@ def benchmark_command(
     ] = None,
     seed: Annotated[int, typer.Option("--seed", min=0, help="Seed of the episodes.")] = 0,
     workers: Annotated[int, typer.Option("--workers", min=1, help="Local processes.")] = 2,
-    scheduler: Annotated[
-        str | None, typer.Option("--scheduler", help="Dask scheduler tcp://HOST:PORT instead.")
-    ] = None,
+    scheduler: Annotated[str | None, typer.Option("--scheduler", help=_SCHEDULER_HELP)] = None,
     sensor_strategy: Annotated[
         str,
         typer.Option(
@@ -174,8 +201,10 @@ def benchmark_command(
     from copi.online import check_strategy
     from copi.world import check_family
 
-    fams = BENCHMARK_FAMILIES if families is None else tuple(
-        f.strip() for f in families.split(",") if f.strip()
+    fams = (
+        BENCHMARK_FAMILIES
+        if families is None
+        else tuple(f.strip() for f in families.split(",") if f.strip())
     )
     for f in fams:
         check_family(f)
@@ -214,7 +243,10 @@ def benchmark_command(
         "benchmark: episodes",
         total,
         lambda report: run_benchmark(
-            config, results, workers=workers, scheduler=scheduler,
+            config,
+            results,
+            workers=workers,
+            scheduler=scheduler,
             progress=_resuming(report, results, "episodes"),
         ),  # fmt: skip
     )
@@ -237,12 +269,15 @@ def pursuit_command(
     seed: Annotated[int, typer.Option("--seed", min=0, help="Seed of the games.")] = 0,
     horizon: Annotated[int, typer.Option("--horizon", min=1, help="Steps to survive.")] = 300,
     workers: Annotated[int, typer.Option("--workers", min=1, help="Local processes.")] = 1,
-    scheduler: Annotated[
-        str | None, typer.Option("--scheduler", help="Dask scheduler tcp://HOST:PORT instead.")
-    ] = None,
+    scheduler: Annotated[str | None, typer.Option("--scheduler", help=_SCHEDULER_HELP)] = None,
     guard: Annotated[
-        float, typer.Option("--guard", min=0.0, help="The capability evader's guard.")
-    ] = 1.2,
+        float | None,
+        typer.Option("--guard", min=0.0, help="The capability evader's guard (default 1.2)."),
+    ] = None,
+    preset: Annotated[
+        str | None,
+        typer.Option("--preset", help="copi's mode: faithful or extended (sets the guard)."),
+    ] = None,
     contact_continues: Annotated[
         bool,
         typer.Option("--contact-continues", help="A contact does not end the game (older rule)."),
@@ -255,6 +290,17 @@ def pursuit_command(
     from copi.experiments.report import summarize_games
     from copi.experiments.store import ResultsStore
 
+    if preset is not None:
+        from copi.errors import InvalidArgumentError
+
+        _preset_method(preset, None, capabilities)
+        from copi.experiments.methods import preset as get_preset
+
+        want = get_preset(preset).guard
+        if guard is not None and guard != want:
+            raise InvalidArgumentError(f"--guard {guard} contradicts --preset {preset} ({want})")
+        guard = want
+    guard = 1.2 if guard is None else guard
     config = PursuitConfig(
         capabilities=str(capabilities), evader=evader, dynamic=dynamic, games=games,
         seed=seed, horizon=horizon, guard=guard, contact_ends=not contact_continues,
@@ -264,7 +310,10 @@ def pursuit_command(
         f"{config.method}: games",
         games,
         lambda report: pursue(
-            config, output, workers=workers, scheduler=scheduler,
+            config,
+            output,
+            workers=workers,
+            scheduler=scheduler,
             progress=_resuming(report, output, "games"),
         ),  # fmt: skip
     )
@@ -310,15 +359,32 @@ def reproduce_command(
     Experiment 2 (200
     homicidal-chauffeur games, stationary and dynamic, capability and game evaders), and
     the report."""
+    from copi.experiments.store import ResultsError
+
+    output.mkdir(parents=True, exist_ok=True)
+    try:
+        _reproduce(output, quick, workers, seed)
+    except ResultsError as exc:
+        if "different configuration" not in str(exc):
+            raise
+        other = "a full" if quick else "a --quick"
+        raise CopiError(
+            f"{output} holds results of {other} run or of other settings; reproduce into "
+            f"another directory (-o), or delete {output} to start over"
+        ) from None
+
+
+def _reproduce(output: Path, quick: bool, workers: int, seed: int) -> None:
     from copi.experiments.benchmark import ensure_capabilities
     from copi.experiments.navigation import NavigationConfig, evaluate
     from copi.experiments.pursuit import PursuitConfig, pursue
     from copi.experiments.report import write_report
 
-    output.mkdir(parents=True, exist_ok=True)
     episodes = 100 if quick else 1549
     results = output / "experiment1.sqlite"
-    modes = [("faithful", 0.0), ("extended", 1.2)]
+    from copi.experiments.methods import PRESETS
+
+    modes = [(name, PRESETS[name].guard) for name in ("faithful", "extended")]
     with progress() as bar:
         for name, guard in modes:
             bar_task = bar.add_task(f"learn ({name})", total=1)
@@ -330,7 +396,10 @@ def reproduce_command(
                 bar.update(task, completed=done)
 
             config = NavigationConfig(
-                capabilities=str(caps_path), method=f"copi-{name}", worlds=episodes, seed=seed,
+                capabilities=str(caps_path),
+                method=f"copi-{name}",
+                worlds=episodes,
+                seed=seed,
                 guard=guard,
             )
             evaluate(

@@ -31,8 +31,9 @@ def learn_command(
         int | None, typer.Option("--landmarks", min=1, help="Force this many landmarks (paper: 9).")
     ] = None,
     directions: Annotated[
-        int, typer.Option("--directions", help="Policies per template: 4, 8 or 16.")
-    ] = 4,
+        int | None,
+        typer.Option("--directions", help="Policies per template: 4, 8 or 16 (default 4)."),
+    ] = None,
     learner: Annotated[
         str, typer.Option("--learner", help="astar (the paper's) or value-iteration.")
     ] = "astar",
@@ -41,12 +42,25 @@ def learn_command(
         typer.Option("--family", help="World family explored (star: the paper's worlds)."),
     ] = "star",
     workers: Annotated[int, typer.Option("--workers", min=1, help="Exploring processes.")] = 1,
+    preset: Annotated[
+        str | None,
+        typer.Option("--preset", help="Learn for a mode: faithful (4 directions), extended (16)."),
+    ] = None,
 ) -> None:
     """Learn capabilities offline, without any task (paper §II): explore, grow the
     context map, skeletonise it into landmarks, reduce them by symmetry, learn local
     policies."""
+    from copi.errors import InvalidArgumentError
+    from copi.experiments.methods import preset as get_preset
     from copi.learning import LearnParams, learn
 
+    if preset is not None:
+        want = get_preset(preset).learn.directions
+        if directions is not None and directions != want:
+            raise InvalidArgumentError(
+                f"--directions {directions} contradicts --preset {preset} ({want} directions)"
+            )
+        directions = want
     params = LearnParams(
         worlds=worlds,
         steps=steps,
@@ -55,7 +69,7 @@ def learn_command(
         max_nodes=max_nodes,
         epochs=epochs,
         landmarks=landmarks,
-        directions=directions,
+        directions=4 if directions is None else directions,
         learner=learner,
         family=family,
     )

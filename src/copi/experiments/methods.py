@@ -24,6 +24,10 @@ from copi.online import SENSING_LEVELS, Agent, CopiAgent, check_sensing
 
 __all__ = [
     "CAPABILITY_PRESETS",
+    "PRESETS",
+    "Preset",
+    "check_preset_capabilities",
+    "preset",
     "METHODS",
     "MethodSpec",
     "make_agent",
@@ -31,12 +35,59 @@ __all__ = [
     "parse_methods",
 ]
 
-CAPABILITY_PRESETS: dict[str, LearnParams] = {
-    "faithful": LearnParams(directions=4),
-    "extended": LearnParams(directions=16),
-}
+
+@dataclass(frozen=True)
+class Preset:
+    """One of copi's modes, whole: what ``copi learn --preset NAME`` learns and what
+    ``copi evaluate`` / ``copi pursuit --preset NAME`` then run with it."""
+
+    name: str
+    learn: LearnParams
+    """The capabilities it learns (seed 0 unless told otherwise)."""
+    method: str
+    """The method ``evaluate --preset`` runs."""
+    guard: float
+    """The hand-written guard's reach (0: none)."""
+    summary: str
+
+
+PRESETS: dict[str, Preset] = {
+    p.name: p
+    for p in [
+        Preset("faithful", LearnParams(directions=4), "copi-faithful", 0.0,
+               "the paper's chain: 4 compass policies per template, no guard"),
+        Preset("extended", LearnParams(directions=16), "copi-extended", 1.2,
+               "16 policies per template, each checked against the live reading by a "
+               "hand-written guard of 1.2 (agent radius, an obstacle's step, a margin)"),
+    ]
+}  # fmt: skip
+"""copi's modes; the README says what each knows and what in it is learnt."""
+
+CAPABILITY_PRESETS: dict[str, LearnParams] = {n: p.learn for n, p in PRESETS.items()}
 """Capabilities each copi mode learns (seed 0 unless told otherwise): the paper's four
 compass policies per template, or sixteen."""
+
+
+def preset(name: str) -> Preset:
+    """A preset by name; an unknown name is refused, listing the known ones."""
+    try:
+        return PRESETS[name]
+    except KeyError:
+        raise InvalidArgumentError(
+            f"preset must be one of {', '.join(PRESETS)}; got {name!r}"
+        ) from None
+
+
+def check_preset_capabilities(name: str, caps: Capabilities, where: str = "the file") -> None:
+    """Refuse capabilities that were not learnt the way preset ``name`` needs, with one
+    line saying how to learn the right ones."""
+    want = preset(name).learn
+    have = int(caps.policies.passable.shape[1])
+    if have != want.directions:
+        raise InvalidArgumentError(
+            f"{where} was learnt with {have} directions; preset {name} needs "
+            f"{want.directions}: learn it with copi learn --preset {name}"
+        )
 
 
 @dataclass(frozen=True)
@@ -162,9 +213,7 @@ def parse_methods(text: str | None) -> list[tuple[str, str]]:
     return sorted(out, key=lambda m: (order[m[0]], SENSING_LEVELS.index(m[1])))
 
 
-def make_agent(
-    name: str, capabilities: Capabilities | None = None, **params: Any
-) -> Agent:
+def make_agent(name: str, capabilities: Capabilities | None = None, **params: Any) -> Agent:
     """A fresh agent of method ``name`` with its registered parameters, updated by
     ``params``; copi's modes need their ``capabilities``."""
     spec = method_spec(name)

@@ -215,8 +215,12 @@ def summarize_games(rows: list[dict[str, Any]]) -> dict[str, Any]:
         "capture": float(np.mean([r["captured"] for r in rows])),
         "collision": float(np.mean([r.get("outcome") == "collision" for r in rows])),
         "escaped": float(
-            np.mean([r.get("outcome", "escaped" if not r["captured"] else "") == "escaped"
-                     for r in rows])
+            np.mean(
+                [
+                    r.get("outcome", "escaped" if not r["captured"] else "") == "escaped"
+                    for r in rows
+                ]
+            )
         ),  # fmt: skip
         "survival_mean": float(survival.mean()),
         "survival_median": float(np.median(survival)),
@@ -307,6 +311,7 @@ def write_report(results: list[str | os.PathLike[str]], directory: str | os.Path
                     figures.append(fig)
     games: list[dict[str, Any]] = []
     game_traj: dict[str, list[dict[str, Any]]] = {}
+    games_info: list[str] = []
     for path in results:
         with ResultsStore(path, readonly=True) as store:
             for run in store.runs():
@@ -316,6 +321,18 @@ def write_report(results: list[str | os.PathLike[str]], directory: str | os.Path
                 g["method"] = run["method"]
                 games.append(g)
                 game_traj[run["method"]] = store.trajectories(run["run_id"], run["method"])
+                cfg = run["config"]
+                games_info.append(
+                    f"- **{run['method']}** (`{Path(path).name}`, run {run['run_id']}): "
+                    f"{cfg['games']} games, seed {cfg['seed']}, evader {cfg['evader']}, "
+                    f"{'moving' if cfg['dynamic'] else 'stationary'} obstacles, horizon "
+                    f"{cfg['horizon']}, guard {cfg.get('guard')}, speed ratio "
+                    f"{cfg.get('gamma')}, turn radius {cfg.get('turn_radius')}, capture "
+                    f"radius {cfg.get('capture_radius')}, contact ends game "
+                    f"{cfg.get('contact_ends', False)}, capabilities "
+                    f"{str(cfg.get('capabilities_sha', ''))[:12] or '?'}; copi "
+                    f"{run['versions'].get('copi')}"
+                )
     if not summaries and not games:
         raise FileNotFoundError(f"no experiment runs in {', '.join(map(str, results))}")
     if summaries:
@@ -346,7 +363,7 @@ def write_report(results: list[str | os.PathLike[str]], directory: str | os.Path
                 f"{g['survival_mean']:.1f} | {g['survival_median']:.1f} | "
                 f"{100 * g['contact_games']:.1f} % | {g['contacts_per_100']:.2f} |"
             )
-        lines.append("")
+        lines += ["", "Runs:", *games_info, ""]
         if fig5 is not None:
             lines.append(f"![{fig5.stem}]({fig5.name})")
     report = out / "report.md"

@@ -453,10 +453,10 @@ def _difference(
     if changed and len(changed) == len(diff):
         return (
             f"{path} holds a {experiment} run of method {method!r} made with other inputs: "
-            f"{' and '.join(changed)} changed since; use another output file or method label"
+            f"{' and '.join(changed)} changed since; write to another output file"
         )
     shown = ", ".join(f"{k}: {other.get(k)!r} there, {config.get(k)!r} now" for k in diff[:3])
     return (
         f"{path} already holds a {experiment} run of method {method!r} with a "
-        f"different configuration ({shown}); use another output file or method label"
+        f"different configuration ({shown}); write to another output file"
     )

@@ -1,0 +1,55 @@
+"""Compile copi's numba kernels ahead of time: ``python -m copi._warmup``.
+
+``make install`` runs this once, so that the first ``make run`` or ``make test`` does not
+pay the kernels' compilation (a few minutes on a slow machine). Every kernel is compiled
+with ``cache=True``: numba keeps the machine code beside the sources and later processes
+load it. The work is tiny (capabilities from 3 worlds, one episode of every method on
+every family, one pursuit game); nothing is written outside a temporary directory.
+"""
+
+from __future__ import annotations
+
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+
+def main() -> None:
+    from copi.experiments.benchmark import BenchmarkConfig, run_benchmark
+    from copi.experiments.methods import method_spec, parse_methods
+    from copi.experiments.pursuit import PursuitConfig, pursue
+    from copi.learning import LearnParams, learn
+    from copi.world import movingai_dir
+
+    t0 = time.perf_counter()
+    print("copi: compiling kernels once (numba), about 30 s", file=sys.stderr, flush=True)
+    with tempfile.TemporaryDirectory() as tmp:
+        d = Path(tmp)
+        caps = learn(LearnParams(worlds=3, steps=60, directions=16, seed=0))
+        caps_path = d / "capabilities.npz"
+        caps.save(caps_path)
+        families = ["star", "polygon", "indoor", "crowd"]
+        try:
+            movingai_dir()
+            families.append("maps")
+        except Exception:  # the maps family needs the Moving AI data beside the checkout
+            pass
+        methods = [m for m in parse_methods(None) if method_spec(m[0]).available]
+        config = BenchmarkConfig(
+            methods=tuple(methods), families=tuple(families), episodes=1, seed=0,
+            capabilities={"faithful": str(caps_path), "extended": str(caps_path)},
+        )  # fmt: skip
+        run_benchmark(config, d / "bench.sqlite")
+        for dynamic in (False, True):
+            for evader in ("capability", "game"):
+                pursue(
+                    PursuitConfig(capabilities=str(caps_path), evader=evader, dynamic=dynamic,
+                                  games=1, horizon=30),
+                    d / "pursuit.sqlite",
+                )  # fmt: skip
+    print(f"copi: kernels compiled in {time.perf_counter() - t0:.0f} s", file=sys.stderr)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()

@@ -2,6 +2,7 @@
 
 Goals (issue: online policy instantiation and Experiment 1):
 - one decision (scan excluded) <= 10 µs for one agent, <= 3 µs per agent batched;
+- the learnt preset's decision (issue: capabilities that earn their keep) <= 10 µs;
 - 2 workers >= 1.8x one worker on the same episodes (the full `copi reproduce` at
   paper scale, <= 120 s on 2 cores, is timed by `make run`).
 """
@@ -18,7 +19,7 @@ import numpy as np
 from benchmarks._timing import Timing, report
 from copi.experiments import NavigationConfig, evaluate
 from copi.learning import LearnParams, explore, learn
-from copi.online import ContextController
+from copi.online import ContextController, LearntAgent
 
 
 def main() -> bool:
@@ -58,11 +59,35 @@ def main() -> bool:
             per=1000,
         ),
     ]
+    from copi.online import _kernels
+
+    learnt = learn(LearnParams(directions=16, safety=True))
+    agent = LearntAgent(learnt)
+    args = (np.ascontiguousarray(agent.model.net), agent._nodes, agent._prior)
+    static = np.full(caps.n_rays, np.inf)
+    p, out, feat = np.empty(17), np.empty(5), np.empty(8 * caps.n_rays)
+    cs, sn = agent._cos, agent._sin
+
+    def learnt_decision() -> None:
+        k = next(j) % 2000
+        _kernels.decide_learnt(
+            readings[k], readings[k - 1], static, *args, want[k, 0], want[k, 1], 5.0, 1.05,
+            2.0, 0.0, False, cs, sn, 10.0, feat, p, out,
+        )  # fmt: skip
+
+    j = iter(range(1, 10**9))
+    learnt_decision()
+    rows.append(
+        Timing(
+            "learnt preset: decide, one agent",
+            min(timeit.repeat(learnt_decision, number=20000, repeat=5)) / 20000,
+        )
+    )
     ok = report(
         "online decision (scan excluded)",
         rows,
         None,
-        {rows[0].name: 10e-6, rows[1].name: 10e-6, rows[2].name: 3e-6},
+        {rows[0].name: 10e-6, rows[1].name: 10e-6, rows[2].name: 3e-6, rows[3].name: 10e-6},
     )
     cfg = NavigationConfig(str(caps_path), worlds=400, method="copi-extended", guard=1.2)
     walls = {}

@@ -254,7 +254,7 @@ def test_presets_set_a_mode_whole(tmp_path: Path, capsys: pytest.CaptureFixture[
         (["learn", "-o", str(tmp_path / "z.npz"), "--preset", "extended", "--directions", "4"],
          "--directions 4 contradicts --preset extended (16 directions)"),
         (["learn", "-o", str(tmp_path / "z.npz"), "--preset", "fancy"],
-         "preset must be one of faithful, extended"),
+         "preset must be one of faithful, extended, learnt"),
         (["evaluate", str(faithful), "-o", str(tmp_path / "z.sqlite"), "--preset", "extended"],
          f"{faithful} was learnt with 4 directions; preset extended needs 16: learn it with "
          "copi learn --preset extended"),
@@ -262,6 +262,9 @@ def test_presets_set_a_mode_whole(tmp_path: Path, capsys: pytest.CaptureFixture[
           "--method", "dwa"], "--method dwa contradicts --preset extended (copi-extended)"),
         (["pursuit", str(caps), "-o", str(tmp_path / "z.sqlite"), "--preset", "faithful"],
          "was learnt with 16 directions; preset faithful needs 4"),
+        (["evaluate", str(caps), "-o", str(tmp_path / "z.sqlite"), "--preset", "learnt"],
+         f"{caps} has no safety priors; preset learnt needs them: learn it with copi learn "
+         "--preset learnt"),
     ]:  # fmt: skip
         code, _, err = run(args, capsys)
         assert code == 2 and message in " ".join(err.split()), err

@@ -50,7 +50,7 @@ def evaluate_command(
     ] = None,
     preset: Annotated[
         str | None,
-        typer.Option("--preset", help="copi's mode: faithful or extended (method and guard)."),
+        typer.Option("--preset", help="copi's mode: faithful, extended or learnt (method, guard)."),
     ] = None,
     worlds: Annotated[int, typer.Option("--worlds", min=1, help="Episodes (paper: 1549).")] = 1549,
     family: Annotated[str, typer.Option("--family", help="World family.")] = "star",
@@ -293,6 +293,11 @@ def pursuit_command(
     if preset is not None:
         from copi.errors import InvalidArgumentError
 
+        if preset == "learnt":
+            raise InvalidArgumentError(
+                "pursuit runs the faithful and extended presets; the learnt preset is not "
+                "in Experiment 2 yet"
+            )
         _preset_method(preset, None, capabilities)
         from copi.experiments.methods import preset as get_preset
 

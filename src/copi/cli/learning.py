@@ -44,7 +44,9 @@ def learn_command(
     workers: Annotated[int, typer.Option("--workers", min=1, help="Exploring processes.")] = 1,
     preset: Annotated[
         str | None,
-        typer.Option("--preset", help="Learn for a mode: faithful (4 directions), extended (16)."),
+        typer.Option(
+            "--preset", help="Learn for a mode: faithful (4 directions), extended (16), learnt."
+        ),
     ] = None,
 ) -> None:
     """Learn capabilities offline, without any task (paper §II): explore, grow the
@@ -61,6 +63,7 @@ def learn_command(
                 f"--directions {directions} contradicts --preset {preset} ({want} directions)"
             )
         directions = want
+    safety = preset is not None and get_preset(preset).learn.safety
     params = LearnParams(
         worlds=worlds,
         steps=steps,
@@ -72,6 +75,7 @@ def learn_command(
         directions=4 if directions is None else directions,
         learner=learner,
         family=family,
+        safety=safety,
     )
     output.parent.mkdir(parents=True, exist_ok=True)
     with progress() as bar:

@@ -20,7 +20,7 @@ from copi.baselines import (
 )
 from copi.errors import InvalidArgumentError
 from copi.learning import Capabilities, LearnParams
-from copi.online import SENSING_LEVELS, Agent, CopiAgent, check_sensing
+from copi.online import SENSING_LEVELS, Agent, CopiAgent, LearntAgent, check_sensing
 
 __all__ = [
     "CAPABILITY_PRESETS",
@@ -59,6 +59,10 @@ PRESETS: dict[str, Preset] = {
         Preset("extended", LearnParams(directions=16), "copi-extended", 1.2,
                "16 policies per template, each checked against the live reading by a "
                "hand-written guard of 1.2 (agent radius, an obstacle's step, a margin)"),
+        Preset("learnt", LearnParams(directions=16, safety=True), "copi-learnt", 1.05,
+               "every compass direction scored by the route and by learnt safety (a network "
+               "over the reading turned to the direction, trained on counterfactual probes "
+               "of a task-free exploration); compass-guard's hand-written guard as a filter"),
     ]
 }  # fmt: skip
 """copi's modes; the README says what each knows and what in it is learnt."""
@@ -82,6 +86,11 @@ def check_preset_capabilities(name: str, caps: Capabilities, where: str = "the f
     """Refuse capabilities that were not learnt the way preset ``name`` needs, with one
     line saying how to learn the right ones."""
     want = preset(name).learn
+    if want.safety and caps.safety is None:
+        raise InvalidArgumentError(
+            f"{where} has no safety priors; preset {name} needs them: learn it with "
+            f"copi learn --preset {name}"
+        )
     have = int(caps.policies.passable.shape[1])
     if have != want.directions:
         raise InvalidArgumentError(
@@ -134,6 +143,14 @@ METHODS: dict[str, MethodSpec] = {
             "the chain with 16 policies per template; each candidate checked against the live "
             "reading by a hand-written guard, which escapes when none is safe",
             {"guard": 1.2}, capabilities="extended",
+        ),
+        MethodSpec(
+            "copi-learnt", "sensor", _MAP_AND_SENSOR,
+            "16 compass moves scored by the route and by learnt safety (a network over the "
+            "reading turned to each move, trained on counterfactual probes of a task-free "
+            "exploration, shared by every direction through the symmetry); compass-guard's "
+            "hand-written guard kept as a filter",
+            {"guard": 1.05, "alpha": 2.0, "beta": 0.0, "wait": False}, capabilities="learnt",
         ),
         MethodSpec(
             "straight", "sensor", _MAP_AND_SENSOR,
@@ -221,6 +238,10 @@ def make_agent(name: str, capabilities: Capabilities | None = None, **params: An
     if spec.capabilities is not None:
         if capabilities is None:
             raise InvalidArgumentError(f"{name} needs a capabilities file")
+        if spec.capabilities == "learnt":
+            return LearntAgent(capabilities, name=name, guard=float(p["guard"]),
+                               alpha=float(p["alpha"]), beta=float(p["beta"]),
+                               wait=bool(p["wait"]))  # fmt: skip
         return CopiAgent(capabilities, name=name, guard=float(p.get("guard", 0.0)),
                          continual=bool(p.get("continual", False)))  # fmt: skip
     if spec.optional and not navground_available():

@@ -17,6 +17,7 @@ from numpy.typing import NDArray
 from copi._files import atomic_write
 from copi.errors import CapabilitiesFormatError
 from copi.learning._policies import ActionPriors, PolicySet
+from copi.learning._safety import SafetyModel
 from copi.learning._skeleton import Landmarks
 from copi.learning._symmetry import Operator, Reduction, SymmetryGroup
 
@@ -32,7 +33,8 @@ _REQUIRED = (
     "pol_directions", "pol_passable", "pol_actions", "pol_lengths", "pol_path_xy",
     "pol_path_start",
 )  # fmt: skip
-_MEMBERS = (*_REQUIRED, "prior_counts", "prior_probabilities", "metadata")
+_SAFETY = ("safety_net", "safety_template", "safety_counts")
+_MEMBERS = (*_REQUIRED, "prior_counts", "prior_probabilities", *_SAFETY, "metadata")
 """The only members read from a file; any other is ignored, never unpacked."""
 MAX_MEMBER_BYTES = 1 << 28
 """A member unpacking to more than this (256 MiB) is refused before it is unpacked."""
@@ -44,6 +46,7 @@ _NDIM = {
     "red_template_of": 1, "red_element": 1, "red_residual": 1, "pol_directions": 2,
     "pol_passable": 2, "pol_actions": 3, "pol_lengths": 2, "pol_path_xy": 2,
     "pol_path_start": 1, "prior_counts": 2, "prior_probabilities": 2,
+    "safety_net": 3, "safety_template": 2, "safety_counts": 2,
 }  # fmt: skip
 
 # Members holding indices, counts or flags: written as integers (or booleans), and
@@ -73,6 +76,8 @@ class Capabilities:
     reduction: Reduction
     policies: PolicySet
     priors: ActionPriors | None = None
+    safety: SafetyModel | None = None
+    """Safety priors from counterfactual probes (``learn --preset learnt``), else None."""
     params: dict[str, Any] = field(default_factory=dict)
     """How they were learnt (JSON-able): sensor, agent, exploration, GNG, ..."""
     stats: dict[str, Any] = field(default_factory=dict)
@@ -139,6 +144,10 @@ class Capabilities:
         if self.priors is not None:
             out["prior_counts"] = self.priors.counts
             out["prior_probabilities"] = self.priors.probabilities
+        if self.safety is not None:
+            out["safety_net"] = self.safety.net
+            out["safety_template"] = self.safety.template_safe
+            out["safety_counts"] = self.safety.template_counts
         return out
 
     def save(self, path: str | os.PathLike[str]) -> Path:
@@ -288,6 +297,11 @@ class Capabilities:
             if "prior_counts" in a and "prior_probabilities" in a
             else None
         )
+        safety = (
+            SafetyModel(a["safety_net"], a["safety_template"], a["safety_counts"])
+            if all(k in a for k in _SAFETY)
+            else None
+        )
         return cls(
             nodes=a["nodes"].astype(np.float64),
             edges=a["edges"].astype(np.int64).reshape(-1, 2),
@@ -296,6 +310,7 @@ class Capabilities:
             reduction=reduction,
             policies=policies,
             priors=priors,
+            safety=safety,
             params=dict(meta.get("params", {})),
             stats=dict(meta.get("stats", {})),
         )
@@ -505,4 +520,12 @@ def _more_problems(c: Capabilities) -> list[str]:
         c.priors.counts.shape != (T, D) or c.priors.probabilities.shape != (T, D)
     ):
         problems.append(f"action priors must have shape ({T}, {D})")
+    if c.safety is not None:
+        net = c.safety.net
+        if net.ndim != 3 or net.shape[0] != 2 or net.shape[2] != 1 + 4 * dim or net.shape[1] < 2:
+            problems.append(f"the safety networks must have shape (2, h + 1, {1 + 4 * dim})")
+        if c.safety.template_safe.shape != (T, D) or c.safety.template_counts.shape != (T, D):
+            problems.append(f"safety priors must have shape ({T}, {D})")
+        if not (np.isfinite(net).all() and np.isfinite(c.safety.template_safe).all()):
+            problems.append("safety priors are not finite")
     return problems

@@ -17,6 +17,7 @@ from copi.learning._capabilities import Capabilities
 from copi.learning._explore import explore
 from copi.learning._gng import GrowingNeuralGas
 from copi.learning._policies import ActionPriors, AStarLearner, ValueIterationLearner, compass
+from copi.learning._safety import learn_safety, probe_states
 from copi.learning._skeleton import skeletonize
 from copi.learning._symmetry import SymmetryGroup, reduce_landmarks, ring_operators
 from copi.world import RangeSensor, check_family
@@ -63,11 +64,25 @@ class LearnParams:
     """Local policies per template: 4 (E, N, W, S, the paper's), 8 or 16."""
     learner: str = "astar"
     """Policy learner: "astar" (the paper's) or "value-iteration"."""
+    safety: bool = False
+    """Also learn safety priors from counterfactual probes (the ``learnt`` preset; see
+    :mod:`copi.learning._safety`)."""
+    probe_worlds: int = 60
+    """Worlds of the probing walks (the families of ``probe_families`` in turn)."""
+    probe_steps: int = 150
+    """Random-walk steps per probing world (every second state is probed)."""
+    probe_horizon: int = 3
+    """Steps each probed action is held while the obstacles move."""
+    probe_families: str = "star,crowd,polygon,indoor"
+    """Comma-separated world families of the probing walks (task-independent: no goal)."""
 
     def __post_init__(self) -> None:
-        for name in ("worlds", "steps", "workers", "n_rays", "epochs"):
+        for name in ("worlds", "steps", "workers", "n_rays", "epochs", "probe_worlds",
+                     "probe_steps", "probe_horizon"):  # fmt: skip
             positive_int(getattr(self, name), name)
         check_family(self.family)
+        for fam in self.probe_families.split(","):
+            check_family(fam.strip())
         if self.learner not in ("astar", "value-iteration"):
             raise InvalidArgumentError(
                 f"learner must be 'astar' or 'value-iteration'; got {self.learner!r}"
@@ -197,6 +212,21 @@ def learn(params: LearnParams | None = None, *, progress: Progress | None = None
             "seconds": time.perf_counter() - t0,
         }
     )
+    safety = None
+    if p.safety:
+        t0 = time.perf_counter()
+        probes = probe_states(
+            tuple(f.strip() for f in p.probe_families.split(",")), p.probe_worlds,
+            p.probe_steps, seed=p.seed, n_directions=p.directions, horizon=p.probe_horizon,
+            agent_radius=p.agent_radius, sensor=sensor,
+            progress=lambda k, n: report("safety probes", k, n),
+        )  # fmt: skip
+        landmark = lm.node_landmark[gng.predict(probes.readings)]
+        safety, safety_stats = learn_safety(
+            probes, p.directions, red.template_of[landmark],
+            group.matrices[red.element[landmark]], len(red.templates), seed=p.seed,
+        )  # fmt: skip
+        stages.append({"stage": "safety", **safety_stats, "seconds": time.perf_counter() - t0})
     return Capabilities(
         nodes=gng.nodes_,
         edges=gng.edges_,
@@ -205,6 +235,7 @@ def learn(params: LearnParams | None = None, *, progress: Progress | None = None
         reduction=red,
         policies=policies,
         priors=priors,
+        safety=safety,
         params={k: v for k, v in dataclasses.asdict(p).items()},
         stats={
             "stages": _jsonable(stages),

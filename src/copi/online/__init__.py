@@ -15,6 +15,7 @@ from copi.online._agent import (
     check_strategy,
 )
 from copi.online._controller import ContextController, Decision
+from copi.online._learnt import LearntAgent
 from copi.online._mapping import Mapping
 from copi.online._strategies import GlobalStrategy, Greedy, Route, make_strategy
 
@@ -25,6 +26,7 @@ __all__ = [
     "Decision",
     "GlobalStrategy",
     "Greedy",
+    "LearntAgent",
     "Mapping",
     "Observation",
     "Route",

@@ -14,6 +14,7 @@ import numpy as np
 from numba import njit
 
 from copi.learning._gng_kernels import FAST
+from copi.learning._safety import safety_probabilities
 
 
 @njit(cache=True, inline="always", fastmath=FAST)
@@ -268,3 +269,110 @@ def decide_batch(  # type: ignore[no-untyped-def]
             x, static[b], node, bd, cand, ok, want[b, 0], want[b, 1], reach[b], guard,
             cos, sin, max_range, out[b],
         )  # fmt: skip
+
+
+@njit(cache=True, fastmath=FAST)
+def decide_learnt(  # type: ignore[no-untyped-def]
+    s, prev, static, nodes, node_prior, net, wx, wy, reach, guard, alpha, beta, wait,
+    cos, sin, max_range, feat, p, out,
+):
+    """One decision of the ``learnt`` preset: every compass direction (and, with
+    ``wait``, standing still) scored by the global direction and the learnt safety
+    together, the guard (as :func:`_choose`'s) kept as a filter.
+
+    score(d) = cos(d, aim) + alpha log P(safe | reading turned to d) + beta log
+    P(safe | template, d through g). Waiting scores alpha log P(safe | wait). When the
+    guard leaves no direction, the agent waits if the model says waiting is safer than
+    every move that does not run into a hit, else escapes where most room is.
+    out = (ax, ay, node, d2, choice): choice d, -2 the escape, -4 waiting, -1 nothing.
+    p (n_dir + 1,) receives the safety probabilities."""
+    for i in range(s.shape[0]):
+        if not (math.isfinite(s[i]) and s[i] >= 0.0 and math.isfinite(prev[i])):
+            out[2] = -1.0
+            return
+        if not static[i] >= 0.0:
+            out[2] = -2.0
+            return
+    n_dir = node_prior.shape[1]
+    node, d2 = _nearest(s, nodes)
+    out[0] = 0.0
+    out[1] = 0.0
+    out[2] = node
+    out[3] = d2
+    out[4] = -1.0
+    norm = math.sqrt(wx * wx + wy * wy)
+    if norm == 0.0:
+        return
+    ux = wx / norm
+    uy = wy / norm
+    safety_probabilities(s, prev, net, n_dir, feat, p)
+    now = np.inf
+    for i in range(s.shape[0]):
+        if s[i] < now:
+            now = s[i]
+    wall = min(_WALL, now - 1e-6)
+    roomy = min(0.35, now - 1e-6)
+    best = -1
+    best_score = -np.inf
+    free_p = 0.0
+    # As _choose with every compass direction a candidate (so that alpha = beta = 0
+    # without waiting is compass-guard, step for step): a guard-rejected direction that
+    # does not run into a hit is a fallback, the one ending farthest from moving hits.
+    fallback = -1
+    fallback_clear = -np.inf
+    for d in range(n_dir):
+        a0 = 2.0 * math.pi * d / n_dir
+        ax = math.cos(a0)
+        ay = math.sin(a0)
+        along = ax * ux + ay * uy
+        step = _step_length(along * reach, reach)
+        end, sweep, sweep_all = _room(s, static, cos, sin, max_range, ax, ay, step)
+        if guard <= 0.0:
+            end = np.inf
+            sweep = np.inf
+        if sweep_all >= wall and p[d] > free_p:
+            free_p = p[d]
+        if end < guard or sweep < 0.5 * guard or sweep_all < wall:
+            if sweep_all >= wall and end > fallback_clear:
+                fallback_clear = end
+                fallback = d
+            continue
+        score = along + alpha * math.log(max(p[d], 1e-9))
+        if beta > 0.0:
+            score += beta * math.log(max(node_prior[node, d], 1e-9))
+        if score > best_score:
+            best_score = score
+            best = d
+    if wait:
+        wait_score = alpha * math.log(max(p[n_dir], 1e-9))
+        if (best >= 0 and wait_score > best_score) or (best < 0 and p[n_dir] > free_p):
+            out[4] = -4.0
+            return
+    if best < 0 and guard > 0.0 and fallback_clear < guard:
+        esc = -1
+        esc_clear = fallback_clear
+        for d in range(n_dir):
+            a0 = 2.0 * math.pi * d / n_dir
+            end, _, sweep_all = _room(
+                s, static, cos, sin, max_range, math.cos(a0), math.sin(a0), 1.0
+            )
+            if sweep_all >= roomy and end > esc_clear:
+                esc_clear = end
+                esc = d
+        if esc >= 0:
+            a0 = 2.0 * math.pi * esc / n_dir
+            out[0] = math.cos(a0)
+            out[1] = math.sin(a0)
+            out[4] = -2.0
+            return
+    if best < 0:
+        best = fallback
+    if best < 0:
+        return
+    a0 = 2.0 * math.pi * best / n_dir
+    ax = math.cos(a0)
+    ay = math.sin(a0)
+    step = _step_length((ax * ux + ay * uy) * reach, reach)
+    out[0] = ax * step
+    out[1] = ay * step
+    out[4] = best

@@ -1,0 +1,132 @@
+"""Learnt safety priors (issue: capabilities that earn their keep): the compiled network
+against numpy, its equivariance under the ring's rotations, template priors through the
+symmetry, files, and the learnt agent's ablation (nothing learnt = compass-guard)."""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from copi.baselines import CompassGuard
+from copi.errors import CapabilitiesFormatError, InvalidArgumentError
+from copi.experiments._episode import run_agent
+from copi.experiments.navigation import draw_episode
+from copi.learning import Capabilities, LearnParams, learn
+from copi.learning._safety import (
+    SafetyModel,
+    predict,
+    safety_features,
+    safety_probabilities,
+    template_priors,
+)
+from copi.learning._symmetry import SymmetryGroup, ring_operators
+from copi.online import LearntAgent
+
+
+@pytest.fixture(scope="module")
+def learnt() -> Capabilities:
+    return learn(LearnParams(worlds=6, steps=150, directions=16, safety=True, probe_worlds=8,
+                             probe_steps=60))  # fmt: skip
+
+
+def _net(seed: int, hidden: int = 5, rays: int = 32) -> np.ndarray:
+    return np.random.default_rng(seed).normal(0, 0.3, (2, hidden + 1, 1 + 4 * rays))
+
+
+def _probs(s: np.ndarray, prev: np.ndarray, net: np.ndarray, n_dir: int = 16) -> np.ndarray:
+    out = np.empty(n_dir + 1)
+    safety_probabilities(s, prev, net, n_dir, np.empty(8 * len(s)), out)
+    return out
+
+
+readings = st.lists(st.floats(0.0, 10.0), min_size=32, max_size=32).map(np.array)
+
+
+@settings(max_examples=30, deadline=None)
+@given(s=readings, prev=readings, seed=st.integers(0, 100), k=st.integers(0, 15))
+def test_the_network_is_one_model_turned_to_each_direction(s, prev, seed, k) -> None:
+    net = _net(seed)
+    p = _probs(s, prev, net)
+    ref = [predict(net[0], safety_features(s, prev, 2 * d)[None])[0] for d in range(16)]
+    assert np.allclose(p[:16], ref, atol=1e-9)
+    assert np.isclose(p[16], predict(net[1], safety_features(s, prev, 0)[None])[0])
+    # the reading turned by k directions: direction d + k now is what d was
+    turned = _probs(np.roll(s, 2 * k), np.roll(prev, 2 * k), net)
+    assert np.allclose(turned[(np.arange(16) + k) % 16], p[:16], atol=1e-9)
+
+
+def test_template_priors_read_through_the_symmetry_equal_priors_probed_in_a_turned_world() -> None:
+    group = SymmetryGroup.generate(ring_operators(32))
+    rng = np.random.default_rng(0)
+    m, n_dir = 400, 16
+    template = rng.integers(0, 3, m)
+    element = rng.integers(0, len(group), m)
+    safe = rng.random((m, n_dir)) < 0.7
+    table, counts = template_priors(template, group.matrices[element], safe, 3)
+    a = 2 * np.pi * np.arange(n_dir) / n_dir
+    dirs = np.column_stack([np.cos(a), np.sin(a)])
+    for r in range(len(group)):  # turn (or mirror) the whole world by group element r
+        rot = group.matrices[r]
+        moved = np.argmax((dirs @ rot.T) @ dirs.T, axis=1)  # direction d goes to moved[d]
+        safe_turned = np.empty_like(safe)
+        safe_turned[:, moved] = safe
+        # a context seen in the turned world maps to the same template by g R^-1
+        mats = group.matrices[element] @ np.linalg.inv(rot)
+        t2, c2 = template_priors(template, mats, safe_turned, 3)
+        assert np.allclose(t2, table) and np.array_equal(c2, counts)
+    assert counts.sum() == m * n_dir and ((table > 0) & (table < 1)).all()
+
+
+def test_learnt_capabilities_round_trip_and_are_checked(learnt: Capabilities, tmp_path) -> None:
+    stage = learnt.stats["stages"][-1]
+    assert stage["stage"] == "safety" and 0.5 < stage["heldout_auc"] <= 1.0
+    assert learnt.safety is not None and learnt.safety.template_safe.shape == (
+        len(learnt.reduction.templates), 16)  # fmt: skip
+    path = learnt.save(tmp_path / "l.npz")
+    back = Capabilities.load(path)
+    assert back.equals(learnt) and np.array_equal(back.safety.net, learnt.safety.net)
+    bad = dict(np.load(path))
+    bad["safety_net"] = bad["safety_net"][:, :, :-1]
+    np.savez(tmp_path / "bad.npz", **bad)
+    with pytest.raises(CapabilitiesFormatError, match="safety networks must have shape"):
+        Capabilities.load(tmp_path / "bad.npz")
+
+
+def test_the_learnt_agent_needs_safety_priors() -> None:
+    caps = learn(LearnParams(worlds=4, steps=100, directions=16))
+    with pytest.raises(InvalidArgumentError, match="no safety priors"):
+        LearntAgent(caps)
+
+
+def test_with_nothing_learnt_it_is_compass_guard_step_for_step(learnt: Capabilities) -> None:
+    for level in ("map", "sensor"):
+        for k in range(6):
+            base = draw_episode("polygon", k, 3)
+            a, b = copy.deepcopy(base), copy.deepcopy(base)
+            ra = run_agent(LearntAgent(learnt, alpha=0.0, beta=0.0, wait=False, guard=1.05), a,
+                           sensing=level, max_steps=150)  # fmt: skip
+            rb = run_agent(CompassGuard(guard=1.05), b, sensing=level, max_steps=150)
+            assert (ra.outcome, ra.steps, ra.path_length) == (rb.outcome, rb.steps, rb.path_length)
+            assert np.array_equal(a.position, b.position)
+
+
+def test_waiting_is_chosen_when_the_network_says_only_waiting_is_safe(learnt) -> None:
+    net = np.zeros((2, 2, 129))
+    net[0, 1, 0] = -8.0  # every move unsafe
+    net[1, 1, 0] = 8.0  # waiting safe
+    model = SafetyModel(net, learnt.safety.template_safe, learnt.safety.template_counts)
+    agent = LearntAgent(learnt, safety=model, alpha=1.0, wait=True)
+    from copi.online import Observation, Task
+
+    agent.reset(Task("sensor", 0.3, 0.5, 32, 10.0))
+    v = agent.act(Observation(np.full(32, 10.0), np.array([5.0, 0.0])))
+    assert np.array_equal(v, [0.0, 0.0]) and agent.n_waits == 1
+    agent.wait = False
+    v = agent.act(Observation(np.full(32, 10.0), np.array([5.0, 0.0])))
+    assert np.allclose(v, [1.0, 0.0])  # all equally unsafe: the route decides
+    with pytest.raises(InvalidArgumentError, match="finite"):
+        agent.act(Observation(np.full(32, np.nan), np.array([5.0, 0.0])))

@@ -26,7 +26,8 @@ def main() -> None:
     print("copi: compiling kernels once (numba), about 30 s", file=sys.stderr, flush=True)
     with tempfile.TemporaryDirectory() as tmp:
         d = Path(tmp)
-        caps = learn(LearnParams(worlds=3, steps=60, directions=16, seed=0))
+        caps = learn(LearnParams(worlds=3, steps=60, directions=16, seed=0, safety=True,
+                                 probe_worlds=2, probe_steps=20))  # fmt: skip
         caps_path = d / "capabilities.npz"
         caps.save(caps_path)
         families = ["star", "polygon", "indoor", "crowd"]
@@ -38,7 +39,7 @@ def main() -> None:
         methods = [m for m in parse_methods(None) if method_spec(m[0]).available]
         config = BenchmarkConfig(
             methods=tuple(methods), families=tuple(families), episodes=1, seed=0,
-            capabilities={"faithful": str(caps_path), "extended": str(caps_path)},
+            capabilities={p: str(caps_path) for p in ("faithful", "extended", "learnt")},
         )  # fmt: skip
         run_benchmark(config, d / "bench.sqlite")
         for dynamic in (False, True):

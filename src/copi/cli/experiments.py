@@ -439,8 +439,9 @@ def _reproduce(output: Path, quick: bool, workers: int, seed: int) -> None:
                           "benchmark (pip install 'copi[peers]')", highlight=False)  # fmt: skip
         bench = BenchmarkConfig(
             methods=tuple(chosen), families=BENCHMARK_FAMILIES, episodes=10 if quick else 30,
-            seed=seed, capabilities=ensure_capabilities(output, {"faithful", "extended"},
-                                                        seed=seed),
+            seed=seed, capabilities=ensure_capabilities(
+                output, {p for m, _ in chosen if (p := method_spec(m).capabilities)}, seed=seed
+            ),
         )  # fmt: skip
         bench_task = bar.add_task(
             "benchmark (quick)", total=bench.episodes * len(chosen) * len(BENCHMARK_FAMILIES)

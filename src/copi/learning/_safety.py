@@ -28,6 +28,7 @@ import copy
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numba import njit
@@ -160,7 +161,7 @@ def _fork(sim: Simulator) -> Simulator:
     c = copy.copy(sim)
     c.position = sim.position.copy()
     c.centers = sim.centers.copy()
-    c.headings = sim.headings.copy()
+    c.headings = np.array(sim.headings, dtype=np.float64)
     c.ranges = sim.ranges.copy()
     c._action = np.zeros(2)
     c.record = False
@@ -225,7 +226,7 @@ def probe_states(
     return Probes(np.array(readings), np.array(previous), np.array(safe))
 
 
-def _design(probes: Probes, n_directions: int) -> tuple[NDArray[np.float64], ...]:
+def _design(probes: Probes, n_directions: int) -> tuple[Any, ...]:
     """Rows (features turned to each direction, plain and mirrored) and labels of the
     direction model; rows and labels of the wait model (each state in the frame of
     direction 0, plain and mirrored)."""

@@ -161,7 +161,7 @@ def _fork(sim: Simulator) -> Simulator:
     c = copy.copy(sim)
     c.position = sim.position.copy()
     c.centers = sim.centers.copy()
-    c.headings = np.array(sim.headings, dtype=np.float64)
+    c.headings = copy.copy(sim.headings)  # an array (copy.copy of an ndarray copies it)
     c.ranges = sim.ranges.copy()
     c._action = np.zeros(2)
     c.record = False

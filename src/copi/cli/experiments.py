@@ -298,10 +298,12 @@ def pursuit_command(
                 "pursuit runs the faithful and extended presets; the learnt preset is not "
                 "in Experiment 2 yet"
             )
-        _preset_method(preset, None, capabilities)
+        from copi.experiments.methods import check_preset_capabilities
         from copi.experiments.methods import preset as get_preset
+        from copi.learning import Capabilities
 
         want = get_preset(preset).guard
+        check_preset_capabilities(preset, Capabilities.load(capabilities), str(capabilities))
         if guard is not None and guard != want:
             raise InvalidArgumentError(f"--guard {guard} contradicts --preset {preset} ({want})")
         guard = want

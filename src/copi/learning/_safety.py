@@ -34,6 +34,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
+from copi.learning._policies import compass
 from copi.world import RandomWalk, RangeSensor, Simulator, random_world, sample_world
 
 __all__ = [
@@ -43,6 +44,7 @@ __all__ = [
     "probe_states",
     "safety_features",
     "safety_probabilities",
+    "template_directions",
 ]
 
 CAP = 4.0
@@ -293,6 +295,14 @@ def predict(net: NDArray[np.float64], x: NDArray[np.float64]) -> NDArray[np.floa
     return 1.0 / (1.0 + np.exp(-(z @ net[h, 1 : 1 + h] + net[h, 0])))
 
 
+def template_directions(matrices: NDArray[np.float64], n_dir: int) -> NDArray[np.int64]:
+    """For symmetries ``matrices`` (m, 2, 2), world frame -> template frame: the compass
+    index, in the template's frame, of each world compass direction (m, D)."""
+    _, dirs = compass(n_dir)
+    turned = np.einsum("mij,dj->mdi", matrices, dirs)
+    return np.argmax(turned @ dirs.T, axis=2)
+
+
 def template_priors(
     template: NDArray[np.int64],
     matrices: NDArray[np.float64],
@@ -304,10 +314,7 @@ def template_priors(
     (m, 2, 2): its symmetry g (world frame -> template frame); ``safe`` (m, D): each
     compass direction's outcome in the world frame."""
     m, n_dir = safe.shape
-    angles = 2 * np.pi * np.arange(n_dir) / n_dir
-    dirs = np.column_stack([np.cos(angles), np.sin(angles)])
-    turned = np.einsum("mij,dj->mdi", matrices, dirs)  # each direction in template frame
-    idx = np.argmax(turned @ dirs.T, axis=2)  # (m, D): its compass index there
+    idx = template_directions(matrices, n_dir)
     hits = np.zeros((n_templates, n_dir))
     counts = np.zeros((n_templates, n_dir))
     rows = np.repeat(np.asarray(template), n_dir)
@@ -352,10 +359,7 @@ def learn_safety(
         t_safe, _ = template_priors(
             template[:cut], matrices[:cut], probes.safe[:cut, :n_dir], n_templates
         )
-        angles = 2 * np.pi * np.arange(n_dir) / n_dir
-        dirs = np.column_stack([np.cos(angles), np.sin(angles)])
-        turned = np.einsum("mij,dj->mdi", matrices[cut:], dirs)
-        idx = np.argmax(turned @ dirs.T, axis=2)
+        idx = template_directions(matrices[cut:], n_dir)
         prior = t_safe[np.asarray(template[cut:])[:, None], idx]
         stats["template_heldout_auc"] = float(
             roc_auc_score(probes.safe[cut:, :n_dir].ravel(), prior.ravel())

@@ -113,6 +113,27 @@ def _step_length(along, reach):  # type: ignore[no-untyped-def]
     return max(along, 0.5 * reach)
 
 
+@njit(cache=True, inline="always")
+def _escape(s, static, cos, sin, max_range, n, clear, roomy, out):  # type: ignore[no-untyped-def]
+    """The escape: a full step along whichever of ``n`` compass directions ends farthest
+    (beyond ``clear``) from moving hits without its path coming within ``roomy`` of any
+    hit; writes it to ``out`` (choice -2) and returns True, or False if none does."""
+    esc = -1
+    for d in range(n):
+        a0 = 2.0 * math.pi * d / n
+        end, _, sweep_all = _room(s, static, cos, sin, max_range, math.cos(a0), math.sin(a0), 1.0)
+        if sweep_all >= roomy and end > clear:
+            clear = end
+            esc = d
+    if esc < 0:
+        return False
+    a0 = 2.0 * math.pi * esc / n
+    out[0] = math.cos(a0)
+    out[1] = math.sin(a0)
+    out[4] = -2.0
+    return True
+
+
 @njit(cache=True, inline="always", fastmath=FAST)
 def _choose(  # type: ignore[no-untyped-def]
     s, static, node, d2, cand, ok, wx, wy, reach, guard, cos, sin, max_range, out
@@ -200,22 +221,7 @@ def _choose(  # type: ignore[no-untyped-def]
     if best < 0 and guard > 0.0 and fallback_clear < guard:
         # Nothing the template offers is safe: escape along whichever compass direction
         # leaves the most room (the live reading overrides the template here).
-        n = cand.shape[1]
-        esc = -1
-        esc_clear = fallback_clear
-        for d in range(n):
-            a0 = 2.0 * math.pi * d / n
-            end, _, sweep_all = _room(
-                s, static, cos, sin, max_range, math.cos(a0), math.sin(a0), 1.0
-            )
-            if sweep_all >= roomy and end > esc_clear:
-                esc_clear = end
-                esc = d
-        if esc >= 0:
-            a0 = 2.0 * math.pi * esc / n
-            out[0] = math.cos(a0)
-            out[1] = math.sin(a0)
-            out[4] = -2.0
+        if _escape(s, static, cos, sin, max_range, cand.shape[1], fallback_clear, roomy, out):
             return
     if best < 0:
         best = fallback
@@ -349,21 +355,7 @@ def decide_learnt(  # type: ignore[no-untyped-def]
             out[4] = -4.0
             return
     if best < 0 and guard > 0.0 and fallback_clear < guard:
-        esc = -1
-        esc_clear = fallback_clear
-        for d in range(n_dir):
-            a0 = 2.0 * math.pi * d / n_dir
-            end, _, sweep_all = _room(
-                s, static, cos, sin, max_range, math.cos(a0), math.sin(a0), 1.0
-            )
-            if sweep_all >= roomy and end > esc_clear:
-                esc_clear = end
-                esc = d
-        if esc >= 0:
-            a0 = 2.0 * math.pi * esc / n_dir
-            out[0] = math.cos(a0)
-            out[1] = math.sin(a0)
-            out[4] = -2.0
+        if _escape(s, static, cos, sin, max_range, n_dir, fallback_clear, roomy, out):
             return
     if best < 0:
         best = fallback

@@ -9,7 +9,7 @@ from numpy.typing import NDArray
 
 from copi.errors import InvalidArgumentError
 from copi.learning import Capabilities
-from copi.learning._safety import SafetyModel
+from copi.learning._safety import SafetyModel, template_directions
 from copi.online import _kernels
 from copi.online._agent import Observation, Steering, Task
 
@@ -20,12 +20,8 @@ def node_priors(caps: Capabilities, model: SafetyModel) -> NDArray[np.float64]:
     """Per context-map node, P(safe) of each compass direction in the world frame: its
     template's prior (learnt in the template's frame) read through the node's symmetry
     g (direction d in the world is g d in the template's frame). Shape (n_nodes, D)."""
-    n_dir = model.template_safe.shape[1]
-    a = 2 * np.pi * np.arange(n_dir) / n_dir
-    dirs = np.column_stack([np.cos(a), np.sin(a)])
     mats = caps.group.matrices[caps.node_element]  # (n, 2, 2): world -> template
-    turned = np.einsum("nij,dj->ndi", mats, dirs)
-    idx = np.argmax(turned @ dirs.T, axis=2)  # (n, D)
+    idx = template_directions(mats, model.template_safe.shape[1])
     return np.ascontiguousarray(model.template_safe[caps.node_template[:, None], idx])
 
 

@@ -498,8 +498,12 @@ def _more_problems(c: Capabilities) -> list[str]:
     ):  # fmt: skip
         if perms.ndim != 2 or perms.shape[1] != dim or not (np.sort(perms, 1) == ident).all():
             problems.append(f"{what} permutations are not permutations of 0..{dim - 1}")
-        elif mats.shape != (len(perms), 2, 2) or not np.allclose(
-            mats @ mats.transpose(0, 2, 1), np.eye(2), atol=1e-6
+        elif (
+            mats.shape != (len(perms), 2, 2)
+            # entries of a rotation or reflection lie in [-1, 1]; checked first, so that
+            # a tampered huge entry cannot overflow the product below
+            or not (np.abs(mats) <= 1 + 1e-6).all()
+            or not np.allclose(mats @ mats.transpose(0, 2, 1), np.eye(2), atol=1e-6)
         ):
             problems.append(f"{what} matrices are not rotations or reflections")
     if not problems and len(g.perms) <= 64:

@@ -60,7 +60,8 @@ class Steered:
 
     def reset(self, task: Task) -> None:
         self.task = task
-        self.steering = Steering()
+        if not hasattr(self, "steering"):  # kept: a lifelong run keeps its map
+            self.steering = Steering()
         self.steering.reset(task)
         angles = ring_angles(task.n_rays)
         self.cos = np.cos(angles)
@@ -76,3 +77,7 @@ class Steered:
         self, obs: Observation, desired: NDArray[np.float64], reach: float
     ) -> NDArray[np.float64]:
         raise NotImplementedError
+
+    def finish(self, outcome: str) -> None:
+        """The task ended (``outcome``): tells the global strategy."""
+        self.steering.finish(outcome)

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from copi.errors import CopiError
 from copi.online import Agent, Observation, Task, check_sensing
@@ -68,9 +69,11 @@ def optimal_to_goal(sim: Simulator, *, quad_segs: int = 16) -> float:
     return max(0.0, length / (1.0 + length_error_bound(quad_segs)) - sim.goal_tolerance)
 
 
-def make_task(sim: Simulator, sensing: str, strategy: str = "greedy") -> Task:
+def make_task(
+    sim: Simulator, sensing: str, strategy: str = "greedy", *, lifelong: bool = False
+) -> Task:
     """The task as a method at ``sensing`` is told it (``strategy``: the global strategy
-    at level ``sensor``, "greedy" or "mapping")."""
+    at level ``sensor``; ``lifelong``: one of a life's tasks, see :class:`Task`)."""
     knows_map = check_sensing(sensing) >= 1
     return Task(
         sensing=sensing,
@@ -82,6 +85,7 @@ def make_task(sim: Simulator, sensing: str, strategy: str = "greedy") -> Task:
         start=sim.position.copy() if knows_map else None,
         goal=sim.goal.copy() if knows_map else None,
         strategy=strategy,
+        lifelong=lifelong,
     )
 
 
@@ -93,6 +97,7 @@ def run_agent(
     max_steps: int,
     end_on_contact: bool = True,
     strategy: str = "greedy",
+    origin: NDArray[np.float64] | None = None,
 ) -> EpisodeOutcome:
     """Run ``agent`` in ``sim`` (fresh, at t = 0) at ``sensing`` until it reaches the
     goal, touches a moving obstacle (when ``end_on_contact``) or runs out of steps.
@@ -100,11 +105,14 @@ def run_agent(
     The agent receives only its level's information (:mod:`copi.online`): the static
     reading is computed only at ``map`` and above, obstacle states only at ``oracle``.
     ``strategy`` is the global strategy every method uses at level ``sensor``.
+    ``origin``: in a lifelong run, where the agent's life began (its odometry is its
+    position less ``origin``, and it may keep what it learnt from earlier tasks).
+    When the episode ends, an agent with a ``finish`` method is told its outcome.
     """
     rank = check_sensing(sensing, agent.sensing, method=agent.name)
     world = sim.world
     sensor = sim.sensor
-    agent.reset(make_task(sim, sensing, strategy))
+    agent.reset(make_task(sim, sensing, strategy, lifelong=origin is not None))
     prev_centers = sim.centers.copy()
     velocities = sim.speed * np.column_stack([np.cos(sim.headings), np.sin(sim.headings)])
     length = 0.0
@@ -130,6 +138,7 @@ def run_agent(
             position=pos.copy() if rank >= 1 else None,
             static=static,
             obstacles=obstacles,
+            odometry=None if origin is None else pos - origin,
         )
         t0 = clock()
         action = agent.act(obs)
@@ -163,6 +172,9 @@ def run_agent(
         outcome = "success"
     else:
         outcome = "timeout"
+    finish = getattr(agent, "finish", None)
+    if finish is not None:
+        finish(outcome)
     counters = agent.counters() if hasattr(agent, "counters") else {}
     return EpisodeOutcome(
         outcome=outcome,

@@ -2,7 +2,7 @@
 
 Table ``runs`` records each run's parameters and versions; ``episodes`` holds one row per
 (run, method, episode), inserted and committed as each episode ends (``games``
-likewise for Experiment 2), so that an
+likewise for Experiment 2, ``lifelong`` one life at a time for Experiment 3), so that an
 interrupted run (Ctrl-C, kill -9) resumes where it stopped: SQLite's transactions make
 each row all-or-nothing, and the primary key makes a row impossible to write twice.
 ``trajectories`` keeps the paths of a few episodes for the figures, as JSON.
@@ -83,6 +83,28 @@ CREATE TABLE IF NOT EXISTS games (
     outcome TEXT,
     PRIMARY KEY (run_id, method, game)
 );
+CREATE TABLE IF NOT EXISTS lifelong (
+    run_id TEXT NOT NULL,
+    experiment TEXT NOT NULL,
+    method TEXT NOT NULL,
+    world TEXT NOT NULL,
+    life INTEGER NOT NULL,
+    task INTEGER NOT NULL,
+    seed INTEGER NOT NULL,
+    family TEXT NOT NULL,
+    sensing TEXT NOT NULL,
+    outcome TEXT NOT NULL,
+    success INTEGER NOT NULL,
+    steps INTEGER NOT NULL,
+    path_length REAL,
+    optimal_length REAL,
+    excess REAL,
+    decision_us REAL,
+    unfamiliar REAL,
+    grown INTEGER,
+    options INTEGER,
+    PRIMARY KEY (run_id, method, life, task)
+);
 CREATE TABLE IF NOT EXISTS trajectories (
     run_id TEXT NOT NULL,
     method TEXT NOT NULL,
@@ -95,6 +117,11 @@ CREATE TABLE IF NOT EXISTS trajectories (
 GAME_COLUMNS = [
     "game", "world", "seed", "dynamic", "captured", "capture_time", "survival", "contacts",
     "closest", "gamma", "beta", "outcome",
+]  # fmt: skip
+
+LIFELONG_COLUMNS = [
+    "world", "life", "task", "seed", "family", "sensing", "outcome", "success", "steps",
+    "path_length", "optimal_length", "excess", "decision_us", "unfamiliar", "grown", "options",
 ]  # fmt: skip
 
 EPISODE_COLUMNS = [
@@ -119,7 +146,7 @@ class ResultsError(CopiError):
 APPLICATION_ID = 0x636F7069  # "copi": SQLite's header field for the file's owner
 STORE_VERSION = 1  # PRAGMA user_version of the format above
 
-_COPI_TABLES = {"runs", "episodes", "games", "trajectories"}
+_COPI_TABLES = {"runs", "episodes", "games", "lifelong", "trajectories"}
 _RUN_COLUMNS = {"run_id", "experiment", "method", "config", "versions", "created"}
 _FIRST_EPISODE_COLUMNS = {
     "run_id", "experiment", "method", "world", "episode", "seed", "success", "collided",
@@ -338,7 +365,9 @@ class ResultsStore:
 
     def done(self, run_id: str, method: str, table: str = "episodes") -> set[int]:
         """Episodes (or games, with ``table="games"``) of the run already stored."""
-        key = {"episodes": "episode", "games": "game"}[table]
+        key = {"episodes": "episode", "games": "game", "lifelong": "life"}[table]
+        if table == "lifelong" and not self._has_table("lifelong"):
+            return set()
         with self._errors():
             rows = self.db.execute(
                 f"SELECT {key} FROM {table} WHERE run_id = ? AND method = ?", (run_id, method)
@@ -354,6 +383,46 @@ class ResultsStore:
     def add_game(self, run_id: str, experiment: str, method: str, result: Any) -> None:
         """Store one game (and its trajectory, if recorded) and commit."""
         self._insert("games", GAME_COLUMNS, run_id, experiment, method, result, result.game)
+
+    def add_life(self, run_id: str, experiment: str, method: str, rows: list[Any]) -> None:
+        """Store one life's tasks (Experiment 3) in one transaction: a life is resumed
+        whole or not at all."""
+        names = ", ".join(LIFELONG_COLUMNS)
+        marks = ", ".join("?" * len(LIFELONG_COLUMNS))
+        self._writable()
+        with self._errors(), self._transaction():
+            for result in rows:
+                row = asdict(result)
+                values = [
+                    int(row[c]) if isinstance(row[c], bool) else _real(row[c])
+                    for c in LIFELONG_COLUMNS
+                ]
+                self.db.execute(
+                    f"INSERT OR IGNORE INTO lifelong (run_id, experiment, method, {names}) "
+                    f"VALUES (?, ?, ?, {marks})",
+                    [run_id, experiment, method, *values],
+                )
+
+    def _has_table(self, table: str) -> bool:
+        with self._errors():
+            row = self.db.execute(
+                "SELECT 1 FROM sqlite_master WHERE type='table' AND name = ?", (table,)
+            ).fetchone()
+        return row is not None
+
+    def lifelong(self, run_id: str | None = None) -> list[dict[str, Any]]:
+        """Rows of Experiment 3 (none in a store written before it existed)."""
+        if not self._has_table("lifelong"):
+            return []
+        cols = ["run_id", "experiment", "method", *LIFELONG_COLUMNS]
+        q = f"SELECT {', '.join(cols)} FROM lifelong"
+        args: tuple[Any, ...] = ()
+        if run_id is not None:
+            q += " WHERE run_id = ?"
+            args = (run_id,)
+        with self._errors():
+            rows = self.db.execute(q + " ORDER BY method, life, task", args).fetchall()
+        return [dict(zip(cols, r, strict=True)) for r in rows]
 
     def _insert(
         self,

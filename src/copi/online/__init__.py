@@ -1,5 +1,6 @@
-"""Online policy instantiation (paper §III): the context chain, global strategies, and
-the protocol every navigating method answers (:class:`Agent`, at a sensing level)."""
+"""Online policy instantiation (paper §III): the context chain, global strategies (the
+causal map of one world among them), and the protocol every navigating method answers
+(:class:`Agent`, at a sensing level)."""
 
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ from copi.online._agent import (
     check_sensing,
     check_strategy,
 )
+from copi.online._causal import CausalMap, CausalMapFormatError, CausalStrategy
 from copi.online._controller import ContextController, Decision
 from copi.online._learnt import LearntAgent
 from copi.online._mapping import Mapping
@@ -21,6 +23,9 @@ from copi.online._strategies import GlobalStrategy, Greedy, Route, make_strategy
 
 __all__ = [
     "Agent",
+    "CausalMap",
+    "CausalMapFormatError",
+    "CausalStrategy",
     "ContextController",
     "CopiAgent",
     "Decision",

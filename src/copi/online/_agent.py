@@ -51,8 +51,10 @@ SENSING_LEVELS = ("sensor", "map", "oracle")
 """The sensing levels, from least to most informed."""
 
 
-SENSOR_STRATEGIES = ("greedy", "mapping")
-"""Global strategies at level ``sensor`` (levels with a map follow the static route)."""
+SENSOR_STRATEGIES = ("greedy", "mapping", "causal")
+"""Global strategies at level ``sensor`` (levels with a map follow the static route):
+head for the goal, map as it goes (:class:`Mapping`), or map and learn a causal map of
+the world from experience (:class:`~copi.online.CausalStrategy`, lifelong runs)."""
 
 
 def check_strategy(name: str) -> str:
@@ -99,8 +101,14 @@ class Task:
     goal: NDArray[np.float64] | None = None
     """The goal in the world's frame (``map`` and ``oracle``)."""
     strategy: str = "greedy"
-    """The global strategy at level ``sensor``: "greedy" (head for the goal) or
-    "mapping" (map as it goes, :class:`Mapping`). Levels with a map follow the route."""
+    """The global strategy at level ``sensor``: "greedy" (head for the goal),
+    "mapping" (map as it goes, :class:`Mapping`) or "causal" (map, and learn from
+    experience which moves work where, :class:`~copi.online.CausalStrategy`). Levels
+    with a map follow the route."""
+    lifelong: bool = False
+    """The agent lives on in this world: tasks follow one another, each observation's
+    ``odometry`` places it in one frame for its whole life, and a method may keep what
+    it learnt (a map, a causal map) from one task to the next (Experiment 3)."""
 
 
 @dataclass(frozen=True)
@@ -118,6 +126,9 @@ class Observation:
     obstacles: NDArray[np.float64] | None = None
     """Moving obstacles as rows (x, y, vx, vy, radius), velocities in steps per step,
     measured over the last step (``oracle``)."""
+    odometry: NDArray[np.float64] | None = None
+    """The agent's position relative to where its life in this world began (lifelong
+    runs, every level; None otherwise): what its own motion tells it, not a map."""
 
 
 class Agent(Protocol):
@@ -142,28 +153,61 @@ class Steering:
     At level ``map`` and above it follows the static route (:class:`Route`, the shortest
     path on the static world, replanned when the agent loses sight of it); at ``sensor``
     it heads for the goal (the relative goal), or with ``Task.strategy == "mapping"``
-    follows a map it builds from the ranges (:class:`Mapping`). So every method at one
-    level gets the same global direction, and only its local behaviour differs.
+    follows a map it builds from the ranges (:class:`Mapping`), or with ``"causal"``
+    also learns from its own experience which moves work where
+    (:class:`~copi.online.CausalStrategy`). So every method at one level gets the same
+    global direction, and only its local behaviour differs.
+
+    In a lifelong run (``Task.lifelong``) the map and the causal map are kept from one
+    task to the next, in the frame of the agent's odometry.
     """
 
-    def reset(self, task: Task) -> None:
+    def __init__(self) -> None:
         self.route: Route | None = None
         self.mapping: Mapping | None = None
+        self.causal: Any = None
+
+    def reset(self, task: Task) -> None:
+        from copi.online._causal import CausalStrategy
+
+        self.route = None
         if task.world is not None and task.start is not None and task.goal is not None:
+            self.mapping = self.causal = None
             self.route = Route()
             self.route.reset(task.world, task.start, task.goal, task.agent_radius)
-        elif check_strategy(task.strategy) == "mapping":
-            self.mapping = Mapping()
-            self.mapping.reset(task.n_rays, task.max_range, task.agent_radius)
+            return
+        kind = check_strategy(task.strategy)
+        keep = task.lifelong
+        if kind == "mapping":
+            self.causal = None
+            if self.mapping is None or not keep:
+                self.mapping = Mapping()
+            self.mapping.reset(task.n_rays, task.max_range, task.agent_radius, keep=keep)
+        elif kind == "causal":
+            self.mapping = None
+            if self.causal is None or not keep:
+                self.causal = CausalStrategy()
+            self.causal.reset(task)
+        else:
+            self.mapping = self.causal = None
 
-    def aim(self, obs: Observation) -> tuple[NDArray[np.float64], float]:
-        """(desired direction, distance to the point aimed at)."""
+    def aim(self, obs: Observation, context: int = -1) -> tuple[NDArray[np.float64], float]:
+        """(desired direction, distance to the point aimed at); ``context``: the local
+        context the agent recognised last (a template index; -1 when it has none), which
+        the causal strategy records its experience under."""
         if self.route is not None and obs.position is not None:
             return self.route.aim(obs.position)
+        if self.causal is not None:
+            return self.causal.aim(obs, context)  # type: ignore[no-any-return]
         if self.mapping is not None:
-            return self.mapping.aim(obs.ranges, obs.goal)
+            return self.mapping.aim(obs.ranges, obs.goal, obs.odometry)
         g = obs.goal
         return np.asarray(g, dtype=np.float64), math.hypot(g[0], g[1])
+
+    def finish(self, outcome: str) -> None:
+        """Tell the strategy how the task ended ("success", "collision", "timeout")."""
+        if self.causal is not None:
+            self.causal.finish(outcome)
 
 
 class CopiAgent:
@@ -223,6 +267,10 @@ class CopiAgent:
             obs.ranges, desired, reach=reach, static=static, explain=self.explain
         )
         return action
+
+    def finish(self, outcome: str) -> None:
+        """The task ended (``outcome``): tells the global strategy."""
+        self.steering.finish(outcome)
 
     def counters(self) -> dict[str, Any]:
         """Per-episode diagnostics stored with the result."""

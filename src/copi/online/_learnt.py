@@ -12,6 +12,7 @@ from copi.learning import Capabilities
 from copi.learning._safety import SafetyModel, template_directions
 from copi.online import _kernels
 from copi.online._agent import Observation, Steering, Task
+from copi.online._controller import ContextController
 
 __all__ = ["LearntAgent", "node_priors"]
 
@@ -46,6 +47,11 @@ class LearntAgent:
         Weights of the safety network and of the template priors.
     wait : bool
         Standing still is among the behaviours.
+    continual : bool
+        Grow the context map for unfamiliar readings as the agent goes (paper §II-A,
+        §III: GNG learning reinstated), each new node given the landmark and symmetry
+        that fit it best (as :class:`~copi.online.ContextController` does); in a lifelong
+        run the grown contexts are kept from task to task.
     """
 
     sensing = "sensor"
@@ -59,6 +65,7 @@ class LearntAgent:
         alpha: float = 1.0,
         beta: float = 0.0,
         wait: bool = True,
+        continual: bool = False,
         safety: SafetyModel | None = None,
     ) -> None:
         model = safety if safety is not None else capabilities.safety
@@ -87,6 +94,12 @@ class LearntAgent:
         self._prev: NDArray[np.float64] | None = None
         self.n_waits = 0
         self.n_decisions = 0
+        self.n_unfamiliar = 0
+        self.continual = bool(continual)
+        self.threshold = float(capabilities.stats.get("familiarity_threshold", np.inf))
+        self._templates = np.asarray(capabilities.node_template, dtype=np.int64)
+        self._growth: ContextController | None = None
+        self._context = -1
 
     def reset(self, task: Task) -> None:
         if task.n_rays != self.capabilities.n_rays:
@@ -100,9 +113,16 @@ class LearntAgent:
         self._prev = None
         self.n_waits = 0
         self.n_decisions = 0
+        self.n_unfamiliar = 0
+        self._context = -1
+        if not task.lifelong and self._growth is not None:  # grown contexts: one life only
+            self._growth = None
+            self._nodes = np.ascontiguousarray(self.capabilities.nodes, dtype=np.float64)
+            self._prior = node_priors(self.capabilities, self.model)
+            self._templates = np.asarray(self.capabilities.node_template, dtype=np.int64)
 
     def act(self, obs: Observation) -> NDArray[np.float64]:
-        desired, reach = self.steering.aim(obs)
+        desired, reach = self.steering.aim(obs, self._context)
         s = np.asarray(obs.ranges, dtype=np.float64)
         prev = s if self._prev is None else self._prev
         static = self._no_static if obs.static is None else obs.static
@@ -118,8 +138,42 @@ class LearntAgent:
         self._prev = s.copy()
         self.n_decisions += 1
         self.n_waits += out[4] == -4.0
+        node = int(out[2])
+        self._context = int(self._templates[node])
+        if out[3] > self.threshold * self.threshold:
+            self.n_unfamiliar += 1
+            if self.continual:
+                self._grow(s)
         return out[:2].copy()
+
+    def _grow(self, s: NDArray[np.float64]) -> None:
+        """Learn an unfamiliar reading into the grown part of the context map."""
+        if self._growth is None:
+            self._growth = ContextController(self.capabilities, continual=True)
+        nodes, _, _ = self._growth._learn_unfamiliar(s)
+        if len(nodes) == len(self._nodes):
+            return
+        g = self._growth
+        base = len(self.capabilities.nodes)
+        self._nodes = np.ascontiguousarray(nodes)
+        self._templates = np.concatenate(
+            [np.asarray(self.capabilities.node_template, dtype=np.int64), g._extra_template]
+        )
+        mats = self.capabilities.group.matrices[g._extra_element]
+        idx = template_directions(mats, self.model.template_safe.shape[1])
+        grown = self.model.template_safe[g._extra_template[:, None], idx]
+        self._prior = np.ascontiguousarray(np.concatenate([self._prior[:base], grown]))
+
+    @property
+    def n_learnt(self) -> int:
+        """Context nodes grown so far (continual)."""
+        return 0 if self._growth is None else self._growth.n_learnt
+
+    def finish(self, outcome: str) -> None:
+        """The task ended (``outcome``): tells the global strategy."""
+        self.steering.finish(outcome)
 
     def counters(self) -> dict[str, Any]:
         """Per-episode diagnostics stored with the result."""
-        return {"unfamiliar": 0.0}
+        rate = self.n_unfamiliar / self.n_decisions if self.n_decisions else 0.0
+        return {"unfamiliar": rate, "waits": self.n_waits, "grown": self.n_learnt}

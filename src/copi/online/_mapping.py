@@ -81,12 +81,16 @@ class Mapping:
         self.lookahead = float(lookahead)
         self.join = float(join)
 
-    def reset(self, n_rays: int, max_range: float, agent_radius: float) -> None:
-        """Start a new task with an empty map."""
+    def reset(
+        self, n_rays: int, max_range: float, agent_radius: float, *, keep: bool = False
+    ) -> None:
+        """Start a new task with an empty map (``keep``: with the map built so far, in a
+        lifelong run, where the grid lives in the frame of the agent's odometry)."""
         n = int(math.ceil(2 * self.extent / self.cell))
-        self.n = n
-        self.occupancy = np.zeros((n, n))
-        self.planner = GridPlanner(np.ones((n, n), dtype=bool))
+        if not (keep and getattr(self, "n", None) == n):
+            self.n = n
+            self.occupancy = np.zeros((n, n))
+            self.planner = GridPlanner(np.ones((n, n), dtype=bool))
         angles = ring_angles(n_rays)
         self._dirs = np.column_stack([np.cos(angles), np.sin(angles)])
         self.max_range = float(max_range)
@@ -150,14 +154,22 @@ class Mapping:
         ij = self._index(a + np.linspace(0.0, 1.0, k)[:, None] * (b - a))
         return bool(self.planner.free[ij[:, 1], ij[:, 0]].all())
 
-    def aim(self, ranges: Any, goal: Any) -> tuple[NDArray[np.float64], float]:
+    def aim(
+        self, ranges: Any, goal: Any, position: Any = None
+    ) -> tuple[NDArray[np.float64], float]:
         """(desired direction, distance to the point aimed at), from the reading and the
-        goal relative to the agent."""
+        goal relative to the agent; ``position``: the agent's odometry in a lifelong run
+        (the grid then lives in that frame), else None (the grid lives in the goal's)."""
         g = np.asarray(goal, dtype=np.float64)
-        p = -g  # the agent in the goal's frame
+        if position is None:
+            p = -g  # the agent in the goal's frame
+            goal_at = np.zeros(2)
+        else:
+            p = np.asarray(position, dtype=np.float64)
+            goal_at = p + g
         self.update(ranges, p)
         here = self._index(p[None])[0]
-        target = self._index(np.zeros((1, 2)))[0]
+        target = self._index(goal_at[None])[0]
         self.age += 1
         stale = self.path is None or self.age >= self.every
         if not stale and self.path is not None:
@@ -168,6 +180,13 @@ class Mapping:
             self._plan(here, target)
         if self.path is None or len(self.path) < 2:
             return g, math.hypot(g[0], g[1])
+        return self._follow(p, goal_at)
+
+    def _follow(
+        self, p: NDArray[np.float64], goal_at: NDArray[np.float64]
+    ) -> tuple[NDArray[np.float64], float]:
+        """Aim along the planned path (``self.path``, two cells at least) from ``p``."""
+        assert self.path is not None
         # Drop the cells behind, then aim at the farthest one in sight within lookahead.
         d = np.hypot(*(self.path - p).T)
         start = int(np.argmin(d))
@@ -178,6 +197,6 @@ class Mapping:
                 break
             aim = q
         if len(self.path) and math.dist(self.path[-1], aim) < 1e-9:
-            aim = np.zeros(2)  # the last cell's centre stands for the goal itself
+            aim = goal_at  # the last cell's centre stands for the goal itself
         v = aim - p
         return v, math.hypot(v[0], v[1])

@@ -1,0 +1,345 @@
+"""Experiment 3, lifelong: an agent that keeps working in one world, task after task
+(paper §I's long-lived agent; §III's causal map; §II-A and §III's continual contexts).
+
+In each of ``worlds`` worlds of a family the agent lives through ``tasks`` successive
+tasks: task t starts where task t - 1's goal was (task 0 at a drawn start) and has a new
+goal; the moving obstacles are drawn anew for each task. World w and all its tasks come
+from ``default_rng([seed, w])`` and ``default_rng([seed, w, t + 1])``, so every method
+meets exactly the same tasks and can be compared task by task. A task that fails (a
+contact, a timeout) leaves the agent where it stopped; it is carried to the next start,
+and its odometry (its position less where its life began) says so: the agent knows where
+it is in its own frame, never the map.
+
+Methods (:data:`LIFELONG_METHODS`) differ in what they keep from task to task: the
+``causal`` strategy keeps its causal map and occupancy grid, ``mapping`` keeps the grid
+(like for like with the baselines, which keep their grids too), ``continual`` also keeps
+the contexts it grew. One work item is one world: its tasks and their optima are drawn
+once, then each method still missing for it lives its life there; a life's rows are
+committed together, so a rerun resumes at the first world not finished.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import hashlib
+import json
+import math
+import os
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from copi.errors import InvalidArgumentError, InvalidWorldError
+from copi.experiments._episode import optimal_to_goal, run_agent
+from copi.experiments._runs import Tally, code_version, execute, file_sha, stops_cleanly
+from copi.experiments.benchmark import benchmark_max_steps
+from copi.experiments.methods import make_agent, method_spec
+from copi.experiments.navigation import _capabilities
+from copi.geometry._arrays import positive_int
+from copi.world import RangeSensor, Simulator, check_family, sample_world
+from copi.world._generate import place_obstacles, sample_start_goal
+
+__all__ = [
+    "LIFELONG_METHODS",
+    "LifeResult",
+    "LifelongConfig",
+    "LifelongMethod",
+    "draw_life",
+    "parse_lifelong_methods",
+    "run_lifelong",
+]
+
+
+@dataclass(frozen=True)
+class LifelongMethod:
+    """A method of Experiment 3: a navigating method, at a level, with a global strategy
+    and what it keeps between tasks."""
+
+    name: str
+    method: str
+    sensing: str
+    strategy: str
+    continual: bool = False
+    summary: str = ""
+
+
+LIFELONG_METHODS: dict[str, LifelongMethod] = {
+    m.name: m
+    for m in [
+        LifelongMethod("copi-learnt+causal", "copi-learnt", "sensor", "causal", False,
+                       "the learnt preset planning over its causal map and occupancy grid, "
+                       "both kept from task to task"),
+        LifelongMethod("copi-learnt+causal+continual", "copi-learnt", "sensor", "causal", True,
+                       "as copi-learnt+causal, also growing contexts for unfamiliar readings"),
+        LifelongMethod("copi-learnt+mapping", "copi-learnt", "sensor", "mapping", False,
+                       "the learnt preset following its occupancy grid (kept), no causal map"),
+        LifelongMethod("compass-guard+mapping", "compass-guard", "sensor", "mapping", False,
+                       "compass-guard following its occupancy grid (kept)"),
+        LifelongMethod("dwa+mapping", "dwa", "sensor", "mapping", False,
+                       "DWA following its occupancy grid (kept)"),
+        LifelongMethod("copi-learnt@map", "copi-learnt", "map", "greedy", False,
+                       "the learnt preset given the static map (the route): the yardstick "
+                       "the sensor-level agent should reach"),
+    ]
+}  # fmt: skip
+"""Experiment 3's methods, copi's first."""
+
+
+def parse_lifelong_methods(text: str | None) -> tuple[str, ...]:
+    """``"copi-learnt+causal,dwa+mapping"`` -> names; None: all of them."""
+    if text is None:
+        return tuple(LIFELONG_METHODS)
+    names = [t.strip() for t in text.split(",") if t.strip()]
+    if not names:
+        raise InvalidArgumentError("methods must name at least one method; got none")
+    for n in names:
+        if n not in LIFELONG_METHODS:
+            raise InvalidArgumentError(
+                f"lifelong method must be one of {', '.join(LIFELONG_METHODS)}; got {n!r}"
+            )
+    return tuple(dict.fromkeys(names))
+
+
+@dataclass(frozen=True)
+class LifelongConfig:
+    """One run of Experiment 3."""
+
+    capabilities: str | None
+    """The ``learnt`` preset's capabilities file (copi's methods need it)."""
+    family: str = "indoor"
+    worlds: int = 20
+    tasks: int = 50
+    seed: int = 0
+    methods: tuple[str, ...] = tuple(LIFELONG_METHODS)
+    agent_radius: float = 0.3
+    capabilities_sha: str = ""
+    maps: str | None = None
+    """A directory to save each (method, world)'s causal map in at the end of its life."""
+
+    def __post_init__(self) -> None:
+        check_family(self.family)
+        positive_int(self.worlds, "worlds")
+        positive_int(self.tasks, "tasks")
+        if not self.methods:
+            raise InvalidArgumentError("methods must name at least one method; got none")
+        for m in self.methods:
+            parse_lifelong_methods(m)
+        needs = [m for m in self.methods if method_spec(LIFELONG_METHODS[m].method).capabilities]
+        if needs and self.capabilities is None:
+            raise InvalidArgumentError(f"{needs[0]} needs the learnt preset's capabilities file")
+
+    def resolved(self) -> LifelongConfig:
+        """With the capabilities file's content hash (checks it loads and has what the
+        learnt preset needs)."""
+        if self.capabilities is None:
+            return self
+        from copi.experiments.methods import check_preset_capabilities
+        from copi.learning import Capabilities
+
+        caps = Capabilities.load(self.capabilities)
+        check_preset_capabilities("learnt", caps, self.capabilities)
+        return dataclasses.replace(self, capabilities_sha=file_sha(self.capabilities))
+
+    def identity(self, method: str) -> dict[str, Any]:
+        """What makes a method's run the same run: not the number of worlds (more worlds
+        extend a run), nor any path."""
+        m = LIFELONG_METHODS[method]
+        spec = method_spec(m.method)
+        ident: dict[str, Any] = {
+            "experiment": "lifelong", "family": self.family, "tasks": self.tasks,
+            "seed": self.seed, "method": method, "base": m.method, "sensing": m.sensing,
+            "strategy": m.strategy, "continual": m.continual, "params": spec.params,
+            "agent_radius": self.agent_radius, "code": code_version(),
+            "max_steps": "min(1000, ceil(3 optimal + 100))",
+        }  # fmt: skip
+        if spec.capabilities is not None:
+            ident["capabilities_sha"] = self.capabilities_sha
+        return ident
+
+    def run_id(self, method: str) -> str:
+        text = json.dumps(self.identity(method), sort_keys=True)
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+@dataclass(frozen=True)
+class LifeResult:
+    """One task of one life (a row of the ``lifelong`` table)."""
+
+    world: str
+    life: int
+    task: int
+    seed: int
+    family: str
+    sensing: str
+    outcome: str
+    success: bool
+    steps: int
+    path_length: float
+    optimal_length: float
+    excess: float
+    decision_us: float
+    unfamiliar: float
+    grown: int
+    """Context nodes grown so far in this life (continual methods)."""
+    options: int
+    """Options recorded in the causal map so far in this life (causal methods)."""
+
+
+def world_identity(family: str, life: int, seed: int) -> str:
+    """The name a causal map file records for the world it was learnt in."""
+    return f"{family}-life-{life:04d}-seed-{seed}"
+
+
+def draw_life(
+    family: str, life: int, seed: int, tasks: int, *, agent_radius: float = 0.3
+) -> list[Simulator]:
+    """The simulators of life ``life``'s tasks, each fresh at t = 0 (see the module)."""
+    rng = np.random.default_rng([seed, life])
+    world = sample_world(family, rng, name=world_identity(family, life, seed))
+    spec = world.obstacles
+    sims = []
+    start: Any = None
+    for t in range(tasks):
+        r = np.random.default_rng([seed, life, t + 1])
+        w = world if start is None else world.replace(start=start, goal=None)
+        s, g = sample_start_goal(w, r, radius=agent_radius, min_distance=10.0)
+        kwargs = {} if spec is None else {"spec": spec}
+        centers, radii = place_obstacles(
+            world, r, keep_clear=np.vstack([s, g]), keep_clear_radius=agent_radius + 1.0,
+            **kwargs,
+        )  # fmt: skip
+        sims.append(
+            Simulator(world, s, g, centers, radii, seed=r, agent_radius=agent_radius,
+                      sensor=RangeSensor(), speed=spec.speed if spec is not None else 0.6)
+        )  # fmt: skip
+        start = g
+    return sims
+
+
+def _agent(config: LifelongConfig, name: str) -> Any:
+    m = LIFELONG_METHODS[name]
+    spec = method_spec(m.method)
+    caps = None
+    if spec.capabilities is not None:
+        assert config.capabilities is not None
+        caps = _capabilities(config.capabilities, config.capabilities_sha)
+    params = {"continual": True} if m.continual else {}
+    return make_agent(m.method, caps, **params)
+
+
+def live(
+    config: LifelongConfig, name: str, life: int, sims: list[Simulator], optima: list[float]
+) -> list[LifeResult]:
+    """Method ``name``'s life in world ``life``: its tasks in order, one agent throughout."""
+    m = LIFELONG_METHODS[name]
+    agent = _agent(config, name)
+    origin = sims[0].position.copy()
+    rows = []
+    for t, (base, optimal) in enumerate(zip(sims, optima, strict=True)):
+        sim = copy.deepcopy(base)
+        res = run_agent(
+            agent, sim, sensing=m.sensing, max_steps=benchmark_max_steps(optimal),
+            strategy=m.strategy, origin=origin,
+        )  # fmt: skip
+        success = res.outcome == "success"
+        steering = getattr(agent, "steering", None)
+        causal = getattr(steering, "causal", None)
+        rows.append(
+            LifeResult(
+                world=sim.world.name, life=life, task=t, seed=config.seed,
+                family=config.family, sensing=m.sensing, outcome=res.outcome,
+                success=success, steps=res.steps, path_length=res.path_length,
+                optimal_length=optimal,
+                excess=res.path_length / optimal - 1 if success and optimal > 0 else math.nan,
+                decision_us=res.decision_us,
+                unfamiliar=float(res.counters.get("unfamiliar", math.nan)),
+                grown=int(res.counters.get("grown", 0)),
+                options=0 if causal is None else causal.map.n_options,
+            )  # fmt: skip
+        )
+    if config.maps is not None:
+        steering = getattr(agent, "steering", None)
+        causal = getattr(steering, "causal", None)
+        if causal is not None:
+            Path(config.maps).mkdir(parents=True, exist_ok=True)
+            ident = world_identity(config.family, life, config.seed)
+            causal.save(Path(config.maps) / f"{name}-{ident}.npz", world=ident,
+                        capabilities=config.capabilities_sha)  # fmt: skip
+    return rows
+
+
+def run_life(
+    config: LifelongConfig, life: int, todo: list[tuple[str, str]]
+) -> list[tuple[str, str, list[LifeResult]]]:
+    """World ``life``: its tasks drawn and their optima computed once, then the life of
+    each (run_id, method) in ``todo``."""
+    try:
+        sims = draw_life(config.family, life, config.seed, config.tasks,
+                         agent_radius=config.agent_radius)  # fmt: skip
+    except InvalidWorldError:
+        return [(rid, name, []) for rid, name in todo]
+    optima = [optimal_to_goal(s) for s in sims]
+    return [(rid, name, live(config, name, life, sims, optima)) for rid, name in todo]
+
+
+def run_lives(
+    config: LifelongConfig, items: list[tuple[int, list[tuple[str, str]]]]
+) -> list[tuple[str, str, list[LifeResult]]]:
+    return [row for life, todo in items for row in run_life(config, life, todo)]
+
+
+def run_lifelong(
+    config: LifelongConfig,
+    output: str | os.PathLike[str],
+    *,
+    workers: int = 1,
+    scheduler: str | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> dict[str, str]:
+    """Run (or resume) Experiment 3 into the results file ``output``; returns the run id
+    of each method."""
+    from copi.experiments.store import ResultsStore
+
+    config = config.resolved()
+    runs: dict[str, str] = {}
+    with ResultsStore(output) as store:
+        missing: dict[int, list[tuple[str, str]]] = {}
+        total = 0
+        for name in config.methods:
+            rid = config.run_id(name)
+            runs[name] = rid
+            store.begin(rid, "lifelong", name, config.identity(name))
+            done = store.done(rid, name, table="lifelong")
+            for w in range(config.worlds):
+                total += 1
+                if w not in done:
+                    missing.setdefault(w, []).append((rid, name))
+        items = sorted(missing.items())
+        tally = Tally(total - sum(len(t) for _, t in items), total)
+        if progress is not None:
+            progress(tally.finished, total)
+
+        def commit(rows: list[tuple[str, str, list[LifeResult]]]) -> None:
+            for rid, name, life_rows in rows:
+                if life_rows:
+                    store.add_life(rid, "lifelong", name, life_rows)
+                tally.finished += 1
+            if progress is not None:
+                progress(tally.finished, total)
+
+        if not items:
+            return runs
+
+        def saved() -> int:
+            return sum(len(store.done(rid, m, table="lifelong")) for m, rid in runs.items())
+
+        execute(
+            config, items, one=lambda c, item: run_life(c, *item), many=run_lives,
+            commit=commit, workers=workers, scheduler=scheduler, chunk=1,
+            stopping=stops_cleanly(tally, output, "lives", saved),
+        )  # fmt: skip
+    return runs

@@ -4,7 +4,8 @@
 pay the kernels' compilation (a few minutes on a slow machine). Every kernel is compiled
 with ``cache=True``: numba keeps the machine code beside the sources and later processes
 load it. The work is tiny (capabilities from 3 worlds, one episode of every method on
-every family, one pursuit game); nothing is written outside a temporary directory.
+every family, one lifelong task, one pursuit game); nothing is written outside a
+temporary directory.
 """
 
 from __future__ import annotations
@@ -42,6 +43,13 @@ def main() -> None:
             capabilities={p: str(caps_path) for p in ("faithful", "extended", "learnt")},
         )  # fmt: skip
         run_benchmark(config, d / "bench.sqlite")
+        from copi.experiments.lifelong import LifelongConfig, run_lifelong
+
+        run_lifelong(
+            LifelongConfig(str(caps_path), family="indoor", worlds=1, tasks=1,
+                           methods=("copi-learnt+causal",)),
+            d / "lifelong.sqlite",
+        )  # fmt: skip
         for dynamic in (False, True):
             for evader in ("capability", "game"):
                 pursue(

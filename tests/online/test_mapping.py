@@ -63,7 +63,7 @@ def test_mapping_uses_only_the_sensor_level() -> None:
     # At the map level the route is followed, whatever the sensor-level strategy.
     s.reset(make_task(sim, "map", "mapping"))
     assert s.route is not None and s.mapping is None
-    with pytest.raises(InvalidArgumentError, match="sensor strategy must be one of greedy, mapping; got 'astar'"):
+    with pytest.raises(InvalidArgumentError, match="sensor strategy must be one of greedy, mapping, causal; got 'astar'"):
         s.reset(make_task(sim, "sensor", "astar"))
 
 

@@ -334,6 +334,59 @@ def pursuit_command(
     )
 
 
+@app.command("lifelong")
+def lifelong_command(
+    capabilities: Annotated[
+        Path, typer.Argument(help="The learnt preset's capabilities (copi learn --preset learnt).")
+    ],
+    output: Annotated[Path, typer.Option("-o", "--output", help="Results file (SQLite).")],
+    family: Annotated[str, typer.Option("--family", help="World family.")] = "indoor",
+    worlds: Annotated[int, typer.Option("--worlds", min=1, help="Worlds (lives).")] = 20,
+    tasks: Annotated[int, typer.Option("--tasks", min=1, help="Tasks in each life.")] = 50,
+    methods: Annotated[
+        str | None, typer.Option("--methods", help="Comma-separated methods (default: all).")
+    ] = None,
+    seed: Annotated[int, typer.Option("--seed", min=0, help="Seed of the worlds and tasks.")] = 0,
+    workers: Annotated[int, typer.Option("--workers", min=1, help="Local processes.")] = 2,
+    scheduler: Annotated[str | None, typer.Option("--scheduler", help=_SCHEDULER_HELP)] = None,
+    maps: Annotated[
+        Path | None,
+        typer.Option("--maps", help="Directory to save each life's causal map in (.npz)."),
+    ] = None,
+) -> None:
+    """Experiment 3, lifelong: in each world, successive tasks (new goal, obstacles
+    moving), the agent keeping its causal map (and grid, and grown contexts) from task to
+    task; beside it the mapping baselines, which keep their grids. Resumable (a life at a
+    time); writes OUTPUT.md and OUTPUT.png: success and median excess early and late in
+    life, paired differences with 95 % intervals, and the goals measured."""
+    from copi.experiments.lifelong import LifelongConfig, parse_lifelong_methods, run_lifelong
+    from copi.experiments.lifelong_report import write_lifelong_report
+    from copi.world import check_family
+
+    check_family(family)
+    chosen = parse_lifelong_methods(methods)
+    if family == "maps":
+        from copi.world import movingai_dir
+
+        movingai_dir()  # refuse a missing data directory before anything is written
+    config = LifelongConfig(
+        capabilities=str(capabilities), family=family, worlds=worlds, tasks=tasks, seed=seed,
+        methods=chosen, maps=None if maps is None else str(maps),
+    )  # fmt: skip
+    output.parent.mkdir(parents=True, exist_ok=True)
+    _with_progress(
+        "lifelong: lives",
+        worlds * len(chosen),
+        lambda report: run_lifelong(
+            config, output, workers=workers, scheduler=scheduler,
+            progress=_resuming(report, output, "lives"),
+        ),  # fmt: skip
+    )
+    report = write_lifelong_report(output, output.with_suffix(".md"))
+    out.print(report.read_text(encoding="utf-8").split("![")[0])
+    out.print(str(report))
+
+
 @app.command("report")
 def report_command(
     results: Annotated[list[Path], typer.Argument(help="Results files (SQLite).")],

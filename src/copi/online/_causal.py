@@ -312,7 +312,7 @@ class CausalMap:
         if not p.is_file():
             raise CausalMapFormatError(f"{p}: no such causal map file")
         try:
-            with np.load(p, allow_pickle=False) as z:
+            with open(p, "rb") as fh, np.load(fh, allow_pickle=False) as z:
                 a = {k: z[k] for k in z.files}
         except (zipfile.BadZipFile, EOFError, zlib.error, ValueError, OSError) as exc:
             raise CausalMapFormatError(
@@ -412,19 +412,22 @@ def _check_arrays(p: Path, cmap: CausalMap, a: dict[str, NDArray[Any]]) -> None:
 
 class CausalStrategy:
     """The global strategy ``causal``: map as :class:`~copi.online.Mapping` does, and
-    plan over a :class:`CausalMap` learnt from the agent's own options (paper §III).
+    learn a :class:`CausalMap` from the agent's own options (paper §III).
 
     Needs only the `sensor` level (the ranges, the relative goal, and in a lifelong run
     the odometry; with no odometry it lives in the goal's frame, as ``mapping`` does,
     and keeps nothing between tasks). Each step the reading is folded into the
-    occupancy grid and the option under way is checked: when the agent has entered
-    another place, or has spent ``patience`` steps in its own, the option's outcome is
-    recorded and the next option is chosen at the new state (place, context), by its
-    context-conditional value. Values are recomputed at each new task, after an option
-    ended somewhere else than planned, and every ``every`` steps (the grid grows). The
-    agent aims at the farthest point of the planned chain of places it can see in a
-    straight line on the grid within ``lookahead``, or at the goal once it is in the
-    goal's place or in sight within ``lookahead``.
+    occupancy grid, whose own plan is made as ``mapping`` makes it, and the option under
+    way is checked: when the agent has entered another place, or has spent ``patience``
+    steps in its own, the option's outcome is recorded and the next option is chosen at
+    the new state (place, context). The grid's way (the option its plan takes out of the
+    place) is kept unless the causal map's value of it, given what was learnt at this
+    state, is worse than the best option's by more than ``slack`` steps: then the causal
+    map's option is followed, aiming at the farthest point of its planned chain of places
+    in a straight line on the grid within ``lookahead``. So where nothing was learnt the
+    strategy is ``mapping``; what it learns (options that led to contacts, or went
+    nowhere, in this context) turns it elsewhere. Values are recomputed at each new
+    task, after an option ended somewhere else than planned, and every ``every`` steps.
     """
 
     name = "causal"
@@ -437,6 +440,7 @@ class CausalStrategy:
         every: int = 25,
         lookahead: float = 6.0,
         margin: int = 3,
+        slack: float = 3.0,
     ) -> None:
         self.map = causal_map or CausalMap()
         self.mapping = mapping or Mapping(extent=self.map.extent)
@@ -454,6 +458,9 @@ class CausalStrategy:
         self.every = int(every)
         self.lookahead = float(lookahead)
         self.margin = int(margin)
+        self.slack = float(slack)
+        self.follows_grid = True
+        self.overrides = 0
         self._occupancy: NDArray[np.float64] | None = None
         self.plans = 0
         self.tasks = 0
@@ -499,11 +506,19 @@ class CausalStrategy:
         free = ~self.mapping._blocked()
         self.mapping.planner.free[...] = free
         m = self.map.m
+        # Plan over the places seen (visited, or in the grid's sight) and those of the
+        # agent and the goal, with a margin of unknown (free) space around them.
         idx = np.flatnonzero(self._visited)
         pts = np.concatenate([idx, [here, goal]])
         jj, ii = np.divmod(pts, m)
-        i0, i1 = max(0, int(ii.min()) - self.margin), min(m, int(ii.max()) + self.margin + 1)
-        j0, j1 = max(0, int(jj.min()) - self.margin), min(m, int(jj.max()) + self.margin + 1)
+        ys, xs = np.nonzero(self.mapping.occupancy)
+        i_lo, i_hi = int(ii.min()), int(ii.max())
+        j_lo, j_hi = int(jj.min()), int(jj.max())
+        if len(xs):
+            i_lo, i_hi = min(i_lo, int(xs.min()) // self.k), max(i_hi, int(xs.max()) // self.k)
+            j_lo, j_hi = min(j_lo, int(ys.min()) // self.k), max(j_hi, int(ys.max()) // self.k)
+        i0, i1 = max(0, i_lo - self.margin), min(m, i_hi + self.margin + 1)
+        j0, j1 = max(0, j_lo - self.margin), min(m, j_hi + self.margin + 1)
         plausible_options(free, self.k, m, i0, i1, j0, j1, OFFSETS, self._plaus, self._seen,
                           self._queue)  # fmt: skip
         gi, gj = np.meshgrid(np.arange(i0, i1), np.arange(j0, j1))
@@ -532,7 +547,8 @@ class CausalStrategy:
         pos, goal_at = self._frame(obs)
         g = goal_at - pos
         mapping = self.mapping
-        mapping.update(obs.ranges, pos)
+        # The grid's own plan (this also folds the reading into the grid).
+        fine = mapping.aim(obs.ranges, g, None if obs.odometry is None else pos)
         cmap = self.map
         here = cmap.place_of(pos)
         goal = cmap.place_of(goal_at)
@@ -550,11 +566,10 @@ class CausalStrategy:
             self.goal_place = goal
             self._plan(here, goal)
         if self.option is None and here != goal:
-            self.option = (here, int(context), self._choose(here, int(context)))
-            self.option_steps = 0
+            self._start_option(here, int(context), pos)
         dist = math.hypot(g[0], g[1])
-        if here == goal or self.value[here] >= 1e9:
-            return g, dist
+        if here == goal or self.value[here] >= 1e9 or self.follows_grid:
+            return fine
         if dist <= self.lookahead and mapping._clear_line(pos, goal_at):
             return g, dist
         assert self.option is not None
@@ -573,6 +588,40 @@ class CausalStrategy:
             q = cmap.neighbour(q, int(self.best[q]))
         v = aim - pos
         return v, math.hypot(v[0], v[1])
+
+    def _grid_option(self, here: int, pos: NDArray[np.float64]) -> int:
+        """The option the grid's plan takes from place ``here`` (-1: none, or it leaves
+        the place for one that is not a neighbour)."""
+        path = self.mapping.path
+        if path is None:
+            return -1
+        cmap = self.map
+        for point in path:
+            q = cmap.place_of(point)
+            if q != here:
+                for a in range(8):
+                    if cmap.neighbour(here, a) == q:
+                        return a
+                return -1
+        return -1
+
+    def _start_option(self, here: int, context: int, pos: NDArray[np.float64]) -> None:
+        """Choose the option at state (here, context): the grid's own way unless what
+        was learnt here says another option is better by more than ``slack`` steps
+        (then the causal map's choice is followed for the option's duration)."""
+        best = self._choose(here, context)
+        grid = self._grid_option(here, pos)
+        self.follows_grid = False
+        if grid >= 0:
+            q_grid = self.map.option_value(here, grid, self.value, bool(self._plaus[here, grid]),
+                                           context)  # fmt: skip
+            q_best = self.map.option_value(here, best, self.value, bool(self._plaus[here, best]),
+                                           context)  # fmt: skip
+            if q_grid <= q_best + self.slack:
+                best, self.follows_grid = grid, True
+        self.option = (here, context, best)
+        self.option_steps = 0
+        self.overrides += not self.follows_grid
 
     def finish(self, outcome: str) -> None:
         """The task ended: an option cut short by a contact is recorded as one."""

@@ -1,0 +1,296 @@
+"""Experiment 3's report: success and median excess early and late in each life, paired
+differences of copi's causal map against every other method on the same late tasks
+(95 % bootstrap intervals resampling whole lives, since the tasks of a life are not
+independent), the issue's goals measured, and a figure against task index. Read back
+from the results store only."""
+
+from __future__ import annotations
+
+import math
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from copi.experiments.benchmark_report import PairedDifference
+from copi.experiments.figures import _figure
+from copi.experiments.lifelong import LIFELONG_METHODS
+from copi.experiments.store import ResultsStore
+
+__all__ = ["lifelong_blocks", "lives_difference", "write_lifelong_report"]
+
+CAUSAL = "copi-learnt+causal"
+"""The method every other row is paired against."""
+
+
+def lifelong_blocks(tasks: int) -> tuple[range, range]:
+    """The early and late tasks compared: 1-10 and the last 10 (41-50 of 50) when a life
+    has 20 tasks or more, else its first and last fifth (one task at least)."""
+    k = 10 if tasks >= 20 else max(1, tasks // 5)
+    return range(0, k), range(tasks - k, tasks)
+
+
+def _stat(rows: list[dict[str, Any]], what: str) -> float:
+    if not rows:
+        return math.nan
+    if what == "success":
+        return float(np.mean([r["outcome"] == "success" for r in rows]))
+    if what == "excess":
+        ex = [r["excess"] for r in rows if r["outcome"] == "success" and r["excess"] is not None]
+        return float(np.median(ex)) if ex else math.nan
+    vals = [r[what] for r in rows if r[what] is not None and math.isfinite(r[what])]
+    return float(np.mean(vals)) if vals else math.nan
+
+
+def lives_difference(
+    a: dict[int, list[dict[str, Any]]],
+    b: dict[int, list[dict[str, Any]]],
+    what: str,
+    *,
+    resamples: int = 2000,
+    seed: int = 0,
+) -> PairedDifference:
+    """stat(a) - stat(b) over the lives both have (``what``: "success", the mean of
+    success, or "excess", the median excess over the tasks both succeeded in), with a
+    95 % percentile bootstrap interval resampling lives with replacement."""
+    lives = sorted(set(a) & set(b))
+    if not lives:
+        return PairedDifference(math.nan, math.nan, math.nan, 0)
+
+    def pair(ls: list[int]) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
+        xa: list[dict[str, Any]] = []
+        xb: list[dict[str, Any]] = []
+        for life in ls:
+            ta = {r["task"]: r for r in a[life]}
+            tb = {r["task"]: r for r in b[life]}
+            for t in sorted(set(ta) & set(tb)):
+                if what == "excess" and not (
+                    ta[t]["outcome"] == "success" and tb[t]["outcome"] == "success"
+                ):
+                    continue
+                xa.append(ta[t])
+                xb.append(tb[t])
+        return xa, xb
+
+    xa, xb = pair(lives)
+    est = _stat(xa, what) - _stat(xb, what)
+    rng = np.random.default_rng(seed)
+    boot = []
+    for _ in range(resamples):
+        ya, yb = pair(list(rng.choice(lives, size=len(lives), replace=True)))
+        d = _stat(ya, what) - _stat(yb, what)
+        if math.isfinite(d):
+            boot.append(d)
+    if not boot or not math.isfinite(est):
+        return PairedDifference(est, math.nan, math.nan, len(xa))
+    low, high = np.percentile(boot, [2.5, 97.5])
+    return PairedDifference(est, float(low), float(high), len(xa))
+
+
+def _pct(x: float) -> str:
+    return "–" if not math.isfinite(x) else f"{100 * x:.1f}"
+
+
+def _diff(d: PairedDifference) -> str:
+    if d.n == 0 or not math.isfinite(d.estimate):
+        return "–"
+    if not math.isfinite(d.low):
+        return f"{100 * d.estimate:+.1f}"
+    return f"{100 * d.estimate:+.1f} [{100 * d.low:+.1f}, {100 * d.high:+.1f}]"
+
+
+def _by_life(rows: list[dict[str, Any]], tasks: range) -> dict[int, list[dict[str, Any]]]:
+    out: dict[int, list[dict[str, Any]]] = {}
+    for r in rows:
+        if r["task"] in tasks:
+            out.setdefault(int(r["life"]), []).append(r)
+    return out
+
+
+def _figure_lifelong(by_method: dict[str, list[dict[str, Any]]], tasks: int, out: Path) -> Path:
+    fig = _figure(10.0, 3.8)
+    ax_s, ax_e = fig.subplots(1, 2)
+    width = max(1, tasks // 10)  # tasks per point
+    for name, rows in by_method.items():
+        xs, succ, exc = [], [], []
+        for start in range(0, tasks, width):
+            block = [r for r in rows if start <= r["task"] < start + width]
+            if not block:
+                continue
+            xs.append(start + 1 + (width - 1) / 2)
+            succ.append(100 * _stat(block, "success"))
+            exc.append(100 * _stat(block, "excess"))
+        style = "-" if name.startswith("copi") else "--"
+        ax_s.plot(xs, succ, style, marker="o", ms=3, label=name)
+        ax_e.plot(xs, exc, style, marker="o", ms=3, label=name)
+    ax_s.set_xlabel("task index")
+    ax_s.set_ylabel("success (%)")
+    ax_e.set_xlabel("task index")
+    ax_e.set_ylabel("median excess (%)")
+    for ax in (ax_s, ax_e):
+        ax.grid(alpha=0.3)
+    ax_e.legend(fontsize=7, frameon=False)
+    fig.tight_layout()
+    target = out
+    fig.savefig(target)
+    return target
+
+
+def write_lifelong_report(
+    results: str | os.PathLike[str], markdown: str | os.PathLike[str]
+) -> Path:
+    """Write Experiment 3's report (``markdown``, and a figure beside it with the same
+    name and ``.png``) from the ``lifelong`` table of ``results``."""
+    with ResultsStore(results, readonly=True) as store:
+        rows = store.lifelong()
+        runs = {r["run_id"]: r for r in store.runs() if r["experiment"] == "lifelong"}
+    target = Path(markdown)
+    if not rows:
+        target.write_text("# Experiment 3 — lifelong\n\nNo lifelong results yet.\n",
+                          encoding="utf-8")  # fmt: skip
+        return target
+    by_method: dict[str, list[dict[str, Any]]] = {}
+    for r in rows:
+        by_method.setdefault(r["method"], []).append(r)
+    order = [m for m in LIFELONG_METHODS if m in by_method] + sorted(
+        m for m in by_method if m not in LIFELONG_METHODS
+    )
+    by_method = {m: by_method[m] for m in order}
+    tasks = 1 + max(int(r["task"]) for r in rows)
+    lives = len({int(r["life"]) for r in rows})
+    families = sorted({r["family"] for r in rows})
+    early, late = lifelong_blocks(tasks)
+    e_name = f"{early.start + 1}–{early.stop}"
+    l_name = f"{late.start + 1}–{late.stop}"
+    lines = [
+        "# Experiment 3 — lifelong",
+        "",
+        f"Family {', '.join(families)}; {lives} worlds (lives), {tasks} successive tasks in "
+        "each; every method meets the same tasks (task t starts at task t − 1's goal; "
+        "obstacles drawn anew per task). A method keeps from task to task what its row "
+        "says. Success and median excess (%) over tasks "
+        f"{e_name} and {l_name} of every life; unfamiliar: share of decisions whose "
+        "reading was unfamiliar.",
+        "",
+        f"| method | sensing | keeps | success {e_name} | success {l_name} | excess {e_name} "
+        f"| excess {l_name} | unfamiliar {e_name} | unfamiliar {l_name} | µs/decision |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    summary: dict[str, dict[str, float]] = {}
+    for name, rs in by_method.items():
+        m = LIFELONG_METHODS.get(name)
+        keeps = "–"
+        if m is not None:
+            keeps = {"causal": "causal map + grid", "mapping": "grid"}.get(m.strategy, "nothing")
+            if m.continual:
+                keeps += " + grown contexts"
+        a = [r for r in rs if r["task"] in early]
+        b = [r for r in rs if r["task"] in late]
+        s = {
+            "success_early": _stat(a, "success"), "success_late": _stat(b, "success"),
+            "excess_early": _stat(a, "excess"), "excess_late": _stat(b, "excess"),
+            "unfamiliar_early": _stat(a, "unfamiliar"), "unfamiliar_late": _stat(b, "unfamiliar"),
+            "decision_us": _stat(rs, "decision_us"),
+        }  # fmt: skip
+        summary[name] = s
+        unf = (
+            (_pct(s["unfamiliar_early"]), _pct(s["unfamiliar_late"]))
+            if name.startswith("copi")
+            else ("–", "–")
+        )
+        bold = f"**{name}**" if name.startswith("copi") else name
+        lines.append(
+            f"| {bold} | {rs[0]['sensing']} | {keeps} | {_pct(s['success_early'])} | "
+            f"{_pct(s['success_late'])} | {_pct(s['excess_early'])} | {_pct(s['excess_late'])} "
+            f"| {unf[0]} | {unf[1]} | {s['decision_us']:.0f} |"
+        )
+    if CAUSAL in by_method:
+        ref = _by_life(by_method[CAUSAL], late)
+        lines += [
+            "",
+            f"Paired on tasks {l_name} (same lives, same tasks): {CAUSAL} minus each method, "
+            "Δ success (points) and Δ median excess (points, tasks both succeeded in), 95 % "
+            "bootstrap intervals resampling lives. ▲/▽: the interval excludes zero "
+            "(▲ copi better).",
+            "",
+            "| versus | Δ success | Δ median excess |",
+            "|---|---|---|",
+        ]
+        for name, rs in by_method.items():
+            if name == CAUSAL:
+                continue
+            other = _by_life(rs, late)
+            ds = lives_difference(ref, other, "success")
+            de = lives_difference(ref, other, "excess")
+            mark_s = ("▲" if ds.estimate > 0 else "▽") if ds.excludes_zero else ""
+            mark_e = ("▲" if de.estimate < 0 else "▽") if de.excludes_zero else ""
+            lines.append(f"| {name} | {_diff(ds)} {mark_s} | {_diff(de)} {mark_e} |")
+    lines += ["", *_goals(summary, by_method, late), ""]
+    fig = _figure_lifelong(by_method, tasks, target.with_suffix(".png"))
+    lines += [f"![success and excess against task index]({fig.name})", ""]
+    lines += ["Runs:", ""]
+    for rid, run in sorted(runs.items(), key=lambda kv: kv[1]["method"]):
+        cfg = run["config"]
+        lines.append(
+            f"- {run['method']}: run {rid}, family {cfg.get('family')}, seed {cfg.get('seed')}, "
+            f"{cfg.get('tasks')} tasks, copi {cfg.get('code')}"
+        )
+    target.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return target
+
+
+def _goals(
+    s: dict[str, dict[str, float]], by_method: dict[str, list[dict[str, Any]]], late: range
+) -> list[str]:
+    """The issue's goals, measured (each says met or not, with its numbers)."""
+    out = ["Goals:", ""]
+
+    def verdict(ok: bool) -> str:
+        return "met" if ok else "**not met**"
+
+    c = s.get(CAUSAL)
+    if c is not None:
+        half = c["excess_late"] <= 0.5 * c["excess_early"]
+        out.append(
+            f"- {CAUSAL}: median excess late {_pct(c['excess_late'])} vs early "
+            f"{_pct(c['excess_early'])} (goal: at most half): {verdict(half)}."
+        )
+        at_map = s.get("copi-learnt@map")
+        if at_map is not None:
+            ok = c["success_late"] >= at_map["success_late"]
+            out.append(
+                f"- {CAUSAL} late success {_pct(c['success_late'])} vs the learnt preset at "
+                f"the map level {_pct(at_map['success_late'])} (goal: at least as high): "
+                f"{verdict(ok)}."
+            )
+        ref = _by_life(by_method[CAUSAL], late)
+        beaten = []
+        for name in by_method:
+            m = LIFELONG_METHODS.get(name)
+            if m is None or m.strategy != "mapping":
+                continue
+            other = _by_life(by_method[name], late)
+            ds = lives_difference(ref, other, "success")
+            de = lives_difference(ref, other, "excess")
+            win = (ds.excludes_zero and ds.estimate > 0) or (de.excludes_zero and de.estimate < 0)
+            beaten.append((name, win))
+        if beaten:
+            ok = all(w for _, w in beaten)
+            lost = ", ".join(n for n, w in beaten if not w) or "none"
+            out.append(
+                f"- {CAUSAL} beats every mapping method that keeps its grid on the late tasks "
+                f"(success or median excess, interval excluding zero): {verdict(ok)} "
+                f"(not beaten: {lost})."
+            )
+    g = s.get("copi-learnt+causal+continual")
+    if g is not None and c is not None:
+        halved = g["unfamiliar_late"] <= 0.5 * g["unfamiliar_early"]
+        kept = g["success_late"] >= c["success_late"]
+        out.append(
+            f"- continual growth: unfamiliar {_pct(g['unfamiliar_early'])} → "
+            f"{_pct(g['unfamiliar_late'])} (goal: at least halved): {verdict(halved)}; late "
+            f"success {_pct(g['success_late'])} vs {_pct(c['success_late'])} without growth "
+            f"(goal: not lower): {verdict(kept)}."
+        )
+    return out

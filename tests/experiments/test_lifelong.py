@@ -1,0 +1,208 @@
+"""Experiment 3: lives of successive tasks, what the agent is told, what it keeps,
+the runner and its store, the report, and bad input at the CLI."""
+
+from __future__ import annotations
+
+import sqlite3
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from copi.experiments._episode import run_agent
+from copi.experiments.lifelong import (
+    LifelongConfig,
+    draw_life,
+    parse_lifelong_methods,
+    run_lifelong,
+    world_identity,
+)
+from copi.experiments.lifelong_report import lifelong_blocks, lives_difference
+from copi.experiments.methods import make_agent
+from copi.experiments.store import ResultsStore
+from copi.learning import Capabilities, LearnParams, learn
+from copi.online import CausalMap, CausalMapFormatError, LearntAgent, Observation, Task
+from tests.cli.test_main import run
+
+
+@pytest.fixture(scope="module")
+def learnt(tmp_path_factory: pytest.TempPathFactory) -> str:
+    path = tmp_path_factory.mktemp("caps") / "capabilities-learnt.npz"
+    learn(LearnParams(worlds=6, steps=150, directions=16, safety=True, probe_worlds=6,
+                      probe_steps=60, seed=1)).save(path)  # fmt: skip
+    return str(path)
+
+
+def test_a_life_is_a_chain_of_tasks_drawn_from_its_index() -> None:
+    sims = draw_life("indoor", 3, 0, 4)
+    again = draw_life("indoor", 3, 0, 4)
+    for a, b in zip(sims, again, strict=True):
+        assert np.array_equal(a.position, b.position) and np.array_equal(a.goal, b.goal)
+        assert np.array_equal(a.centers, b.centers)
+    for before, after in zip(sims, sims[1:], strict=False):
+        assert np.array_equal(after.position, before.goal)  # a task starts at the last goal
+        assert np.hypot(*(after.goal - after.position)) >= 10.0
+    assert len({s.world.name for s in sims}) == 1
+    assert sims[0].world.name == world_identity("indoor", 3, 0)
+    other = draw_life("indoor", 4, 0, 1)[0]
+    assert not np.array_equal(other.goal, sims[0].goal)
+
+
+class _Spy:
+    name = "spy"
+    sensing = "sensor"
+
+    def __init__(self) -> None:
+        self.tasks: list[Task] = []
+        self.seen: list[Observation] = []
+        self.outcomes: list[str] = []
+
+    def reset(self, task: Task) -> None:
+        self.tasks.append(task)
+
+    def act(self, obs: Observation) -> Any:
+        self.seen.append(obs)
+        return np.array([1.0, 0.0])
+
+    def finish(self, outcome: str) -> None:
+        self.outcomes.append(outcome)
+
+
+def test_a_lifelong_agent_is_told_its_odometry_and_nothing_more() -> None:
+    sims = draw_life("indoor", 0, 0, 2)
+    origin = sims[0].position.copy()
+    spy = _Spy()
+    for sim in sims:
+        start = sim.position.copy()
+        out = run_agent(spy, sim, sensing="sensor", max_steps=5, origin=origin)
+        first = spy.seen[-out.steps]
+        assert np.allclose(first.odometry, start - origin)
+        assert first.position is None and first.static is None and first.obstacles is None
+    assert [t.lifelong for t in spy.tasks] == [True, True]
+    assert all(t.world is None for t in spy.tasks)
+    assert len(spy.outcomes) == 2  # told how each task ended
+    # Outside a life there is no odometry.
+    single = _Spy()
+    run_agent(single, draw_life("indoor", 0, 0, 1)[0], sensing="sensor", max_steps=2)
+    assert single.seen[0].odometry is None and not single.tasks[0].lifelong
+
+
+def test_continual_contexts_grow_and_make_a_reading_familiar(learnt: str) -> None:
+    caps = Capabilities.load(learnt)
+    agent = make_agent("copi-learnt", caps, continual=True)
+    assert isinstance(agent, LearntAgent)
+    sim = draw_life("indoor", 0, 0, 1)[0]
+    run_agent(agent, sim, sensing="sensor", max_steps=3, origin=sim.position.copy())
+    odd = np.full(caps.n_rays, 0.4)  # a reading no exploration produced: walls all round
+    odd[::2] = 9.5
+    obs = Observation(ranges=odd, goal=np.array([5.0, 0.0]), odometry=np.zeros(2))
+    for _ in range(40):
+        agent.act(obs)
+    assert agent.n_learnt > 0
+    before = agent.n_unfamiliar
+    agent.act(obs)
+    assert agent.n_unfamiliar == before  # now familiar: a grown node sits near it
+    fixed = make_agent("copi-learnt", caps)
+    fixed.reset(Task("sensor", 0.3, 0.5, caps.n_rays, 10.0))
+    for _ in range(3):
+        fixed.act(obs)
+    assert fixed.n_unfamiliar == 3 and fixed.n_learnt == 0  # without growth it stays odd
+
+
+def _rows(path: Path) -> list[dict]:
+    with ResultsStore(path, readonly=True) as store:
+        return [{k: v for k, v in r.items() if k != "decision_us"} for r in store.lifelong()]
+
+
+def test_runner_resumes_a_life_at_a_time_and_saves_causal_maps(learnt: str, tmp_path: Path) -> None:
+    methods = ("copi-learnt+causal", "compass-guard+mapping")
+    cfg = LifelongConfig(learnt, family="indoor", worlds=2, tasks=3, methods=methods,
+                         maps=str(tmp_path / "maps"))  # fmt: skip
+    out = tmp_path / "life.sqlite"
+    runs = run_lifelong(cfg, out, workers=1)
+    rows = _rows(out)
+    assert len(rows) == 2 * 2 * 3 and set(runs) == set(methods)
+    by_task: dict[tuple[int, int], list[dict]] = {}
+    for r in rows:
+        by_task.setdefault((r["life"], r["task"]), []).append(r)
+        assert r["outcome"] in ("success", "collision", "timeout")
+        assert r["success"] == (r["outcome"] == "success")
+    for group in by_task.values():  # the same task for every method
+        assert len({g["optimal_length"] for g in group}) == 1
+    causal = [r for r in rows if r["method"] == "copi-learnt+causal"]
+    for life in (0, 1):
+        opts = [r["options"] for r in causal if r["life"] == life]
+        assert opts == sorted(opts) and opts[-1] > 0  # the map only grows through a life
+    # A lost life is run again, whole; the others are not touched.
+    with sqlite3.connect(out) as db:
+        db.execute("DELETE FROM lifelong WHERE life = 1 AND method = 'compass-guard+mapping'")
+    run_lifelong(cfg, out, workers=2)
+    assert _rows(out) == rows
+    # Each causal life was saved, for its world and these capabilities.
+    from copi.experiments._runs import file_sha
+
+    ident = world_identity("indoor", 0, 0)
+    saved = tmp_path / "maps" / f"copi-learnt+causal-{ident}.npz"
+    cmap, occ = CausalMap.load(saved, world=ident, capabilities=file_sha(learnt))
+    assert cmap.n_options == causal[2]["options"] and occ is not None
+    with pytest.raises(CausalMapFormatError, match="a causal map of world"):
+        CausalMap.load(saved, world=world_identity("indoor", 1, 0))
+
+
+def test_lives_difference_against_a_hand_computed_case() -> None:
+    def life(outcomes: list[str], excess: list[float]) -> list[dict]:
+        return [{"task": t, "outcome": o, "excess": e}
+                for t, (o, e) in enumerate(zip(outcomes, excess, strict=True))]  # fmt: skip
+
+    a = {0: life(["success", "success"], [0.1, 0.2]), 1: life(["success", "timeout"], [0.3, 0])}
+    b = {0: life(["success", "timeout"], [0.2, 0.0]), 1: life(["success", "timeout"], [0.5, 0])}
+    s = lives_difference(a, b, "success")
+    assert s.estimate == pytest.approx(3 / 4 - 2 / 4) and s.n == 4
+    e = lives_difference(a, b, "excess")  # tasks both succeeded in: (0.1 vs 0.2), (0.3 vs 0.5)
+    assert e.estimate == pytest.approx(np.median([0.1, 0.3]) - np.median([0.2, 0.5])) and e.n == 2
+    assert e.low <= e.estimate <= e.high
+    assert lifelong_blocks(50) == (range(0, 10), range(40, 50))
+    assert lifelong_blocks(10) == (range(0, 2), range(8, 10))
+
+
+def test_the_cli_runs_and_reports(learnt: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "run.sqlite"
+    code, text, err = run(["lifelong", learnt, "-o", str(out), "--worlds", "1", "--tasks", "2",
+                           "--methods", "copi-learnt+causal,dwa+mapping", "--workers", "1"],
+                          capsys)  # fmt: skip
+    assert code == 0, err
+    assert "| **copi-learnt+causal** | sensor | causal map + grid |" in text
+    assert "| dwa+mapping |" in text and "Goals:" in text
+    assert out.with_suffix(".png").stat().st_size > 10_000
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--methods", "astar"], "lifelong method must be one of copi-learnt+causal"),
+        (["--family", "moon"], "family must be one of"),
+        (["--tasks", "0"], "--tasks"),
+    ],
+)
+def test_bad_input_is_one_line_and_writes_nothing(
+    args: list[str], message: str, learnt: str, tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:  # fmt: skip
+    out = tmp_path / "run.sqlite"
+    code, _, err = run(["lifelong", learnt, "-o", str(out), *args], capsys)
+    assert code == 2 and message in err and "Traceback" not in err, err
+    assert not out.exists()
+
+
+def test_capabilities_without_priors_are_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    plain = tmp_path / "plain.npz"
+    learn(LearnParams(worlds=3, steps=60, directions=16, seed=0)).save(plain)
+    out = tmp_path / "run.sqlite"
+    code, _, err = run(["lifelong", str(plain), "-o", str(out), "--worlds", "1"], capsys)
+    assert code == 2 and "has no safety priors; preset learnt needs them" in err, err
+    assert "Traceback" not in err
+    assert not out.exists()
+    assert parse_lifelong_methods("dwa+mapping, dwa+mapping") == ("dwa+mapping",)

@@ -11,6 +11,7 @@ from benchmarks import (  # noqa: E402
     bench_baselines,
     bench_games,
     bench_learning,
+    bench_lifelong,
     bench_online,
     bench_planning,
     bench_world,
@@ -25,6 +26,7 @@ def main() -> int:
         "online": bench_online.main(),
         "games": bench_games.main(),
         "baselines": bench_baselines.main(),
+        "lifelong": bench_lifelong.main(),
     }
     missed = [name for name, ok in results.items() if not ok]
     print("all goals met" if not missed else f"goals missed in: {', '.join(missed)}")

@@ -417,8 +417,8 @@ def reproduce_command(
     chain) and the extended mode (16 directions, candidates checked against the live
     reading with a guard of 1.2: the agent radius, an obstacle's step and a margin),
     Experiment 2 (200
-    homicidal-chauffeur games, stationary and dynamic, capability and game evaders), and
-    the report."""
+    homicidal-chauffeur games, stationary and dynamic, capability and game evaders), the
+    benchmark, Experiment 3 (lifelong: 20 indoor worlds of 50 tasks), and the report."""
     from copi.experiments.store import ResultsError
 
     output.mkdir(parents=True, exist_ok=True)
@@ -510,11 +510,27 @@ def _reproduce(output: Path, quick: bool, workers: int, seed: int) -> None:
             bench, bench_out, workers=workers,
             progress=_resuming(advance_bench, bench_out, "episodes"),
         )  # fmt: skip
+        # Experiment 3, lifelong (quick: 2 worlds of 10 tasks).
+        from copi.experiments.lifelong import LifelongConfig, run_lifelong
+
+        life = LifelongConfig(
+            ensure_capabilities(output, {"learnt"}, seed=seed)["learnt"], family="indoor",
+            worlds=2 if quick else 20, tasks=10 if quick else 50, seed=seed,
+        )  # fmt: skip
+        life_task = bar.add_task("lifelong (lives)", total=life.worlds * len(life.methods))
+
+        def advance_lives(done: int, total: int, task: Any = life_task) -> None:
+            bar.update(task, completed=done)
+
+        run_lifelong(life, results, workers=workers,
+                     progress=_resuming(advance_lives, results, "lives"))  # fmt: skip
     write_benchmark_report(output / "benchmark.sqlite", output)
     report = write_report([str(results)], output)
     text = report.read_text(encoding="utf-8")
     out.print(text.split("Runs:")[0])
     if "# Experiment 2" in text:
         out.print("# Experiment 2" + text.split("# Experiment 2")[1].split("![")[0])
+    if "# Experiment 3" in text:
+        out.print("# Experiment 3" + text.split("# Experiment 3")[1].split("![")[0])
     out.print(str(report))
     out.print(str(output / "benchmark.md"))

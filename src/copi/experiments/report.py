@@ -333,7 +333,16 @@ def write_report(results: list[str | os.PathLike[str]], directory: str | os.Path
                     f"{str(cfg.get('capabilities_sha', ''))[:12] or '?'}; copi "
                     f"{run['versions'].get('copi')}"
                 )
-    if not summaries and not games:
+    lifelong: list[Path] = []
+    for path in results:
+        with ResultsStore(path, readonly=True) as store:
+            has_lives = bool(store.lifelong())
+        if has_lives:
+            from copi.experiments.lifelong_report import write_lifelong_report
+
+            name = "lifelong.md" if not lifelong else f"lifelong-{len(lifelong) + 1}.md"
+            lifelong.append(write_lifelong_report(path, out / name))
+    if not summaries and not games and not lifelong:
         raise FileNotFoundError(f"no experiment runs in {', '.join(map(str, results))}")
     if summaries:
         figures.append(_fig4(excess, out))
@@ -366,6 +375,8 @@ def write_report(results: list[str | os.PathLike[str]], directory: str | os.Path
         lines += ["", "Runs:", *games_info, ""]
         if fig5 is not None:
             lines.append(f"![{fig5.stem}]({fig5.name})")
+    for part in lifelong:
+        lines += ["", part.read_text(encoding="utf-8")]
     report = out / "report.md"
     report.write_text("\n".join(lines) + "\n", encoding="utf-8")
     return report

@@ -206,3 +206,37 @@ def test_capabilities_without_priors_are_refused(
     assert "Traceback" not in err
     assert not out.exists()
     assert parse_lifelong_methods("dwa+mapping, dwa+mapping") == ("dwa+mapping",)
+
+
+def test_a_life_resumes_from_saved_maps_and_bad_maps_are_refused(
+    learnt: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    maps = tmp_path / "maps"
+    base = ["lifelong", learnt, "--worlds", "1", "--tasks", "2", "--methods",
+            "copi-learnt+causal", "--workers", "1"]  # fmt: skip
+    code, _, err = run([*base, "-o", str(tmp_path / "a.sqlite"), "--maps", str(maps)], capsys)
+    assert code == 0, err
+    code, _, err = run([*base, "-o", str(tmp_path / "b.sqlite"), "--from-maps", str(maps)],
+                       capsys)  # fmt: skip
+    assert code == 0, err
+    a, b = _rows(tmp_path / "a.sqlite"), _rows(tmp_path / "b.sqlite")
+    # The resumed life starts with the first life's options and adds its own.
+    assert b[0]["options"] > a[-1]["options"]
+    saved = maps / f"copi-learnt+causal-{world_identity('indoor', 0, 0)}.npz"
+    # A map of another world (the file renamed), truncated, or missing: one line, exit 2.
+    other = tmp_path / "other"
+    other.mkdir()
+    (other / saved.name.replace("0000", "0001")).write_bytes(saved.read_bytes())
+    code, _, err = run([*base, "--worlds", "2", "-o", str(tmp_path / "c.sqlite"),
+                        "--from-maps", str(other)], capsys)  # fmt: skip
+    assert code == 2 and "no causal map of copi-learnt+causal in world indoor-life-0000" in err
+    (other / saved.name).write_bytes(saved.read_bytes())
+    code, _, err = run([*base, "--worlds", "2", "-o", str(tmp_path / "c.sqlite"),
+                        "--from-maps", str(other)], capsys)  # fmt: skip
+    assert code == 2 and "a causal map of world 'indoor-life-0000-seed-0', not of " \
+        "'indoor-life-0001-seed-0'" in err, err
+    (other / saved.name).write_bytes(saved.read_bytes()[:200])
+    code, _, err = run([*base, "-o", str(tmp_path / "c.sqlite"), "--from-maps", str(other)],
+                       capsys)  # fmt: skip
+    assert code == 2 and "not a complete causal map file" in err and "Traceback" not in err
+    assert not (tmp_path / "c.sqlite").exists()

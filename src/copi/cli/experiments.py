@@ -353,6 +353,11 @@ def lifelong_command(
         Path | None,
         typer.Option("--maps", help="Directory to save each life's causal map in (.npz)."),
     ] = None,
+    from_maps: Annotated[
+        Path | None,
+        typer.Option("--from-maps", help="Start each causal life from the map saved here "
+                     "by an earlier run's --maps (same world, same capabilities)."),
+    ] = None,
 ) -> None:
     """Experiment 3, lifelong: in each world, successive tasks (new goal, obstacles
     moving), the agent keeping its causal map (and grid, and grown contexts) from task to
@@ -372,7 +377,9 @@ def lifelong_command(
     config = LifelongConfig(
         capabilities=str(capabilities), family=family, worlds=worlds, tasks=tasks, seed=seed,
         methods=chosen, maps=None if maps is None else str(maps),
+        from_maps=None if from_maps is None else str(from_maps),
     )  # fmt: skip
+    config = config.resolved()  # refuses bad inputs (capabilities, maps) before writing
     output.parent.mkdir(parents=True, exist_ok=True)
     _with_progress(
         "lifelong: lives",

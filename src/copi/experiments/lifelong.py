@@ -119,6 +119,10 @@ class LifelongConfig:
     capabilities_sha: str = ""
     maps: str | None = None
     """A directory to save each (method, world)'s causal map in at the end of its life."""
+    from_maps: str | None = None
+    """A directory of causal maps saved by an earlier run (``maps``): each causal
+    method's life starts from its map of that world (a life resumed)."""
+    from_maps_sha: str = ""
 
     def __post_init__(self) -> None:
         check_family(self.family)
@@ -142,7 +146,27 @@ class LifelongConfig:
 
         caps = Capabilities.load(self.capabilities)
         check_preset_capabilities("learnt", caps, self.capabilities)
-        return dataclasses.replace(self, capabilities_sha=file_sha(self.capabilities))
+        done = dataclasses.replace(self, capabilities_sha=file_sha(self.capabilities))
+        if self.from_maps is None:
+            return done
+        # Every map the run will start from, checked now (before anything is written).
+        from copi.online import CausalMap
+
+        h = hashlib.sha256()
+        for name in self.methods:
+            if LIFELONG_METHODS[name].strategy != "causal":
+                continue
+            for life in range(self.worlds):
+                path = causal_map_path(self.from_maps, name, self.family, life, self.seed)
+                if not path.is_file():
+                    raise InvalidArgumentError(
+                        f"{self.from_maps}: no causal map of {name} in world "
+                        f"{world_identity(self.family, life, self.seed)} ({path.name})"
+                    )
+                CausalMap.load(path, world=world_identity(self.family, life, self.seed),
+                               capabilities=done.capabilities_sha)  # fmt: skip
+                h.update(path.name.encode() + bytes.fromhex(file_sha(path)))
+        return dataclasses.replace(done, from_maps_sha=h.hexdigest())
 
     def identity(self, method: str) -> dict[str, Any]:
         """What makes a method's run the same run: not the number of worlds (more worlds
@@ -158,6 +182,8 @@ class LifelongConfig:
         }  # fmt: skip
         if spec.capabilities is not None:
             ident["capabilities_sha"] = self.capabilities_sha
+        if self.from_maps is not None and m.strategy == "causal":
+            ident["from_maps_sha"] = self.from_maps_sha
         return ident
 
     def run_id(self, method: str) -> str:
@@ -192,6 +218,11 @@ class LifeResult:
 def world_identity(family: str, life: int, seed: int) -> str:
     """The name a causal map file records for the world it was learnt in."""
     return f"{family}-life-{life:04d}-seed-{seed}"
+
+
+def causal_map_path(directory: str, method: str, family: str, life: int, seed: int) -> Path:
+    """Where a run saves (``maps``) and finds (``from_maps``) a life's causal map."""
+    return Path(directory) / f"{method}-{world_identity(family, life, seed)}.npz"
 
 
 def draw_life(
@@ -237,6 +268,14 @@ def live(
     """Method ``name``'s life in world ``life``: its tasks in order, one agent throughout."""
     m = LIFELONG_METHODS[name]
     agent = _agent(config, name)
+    ident = world_identity(config.family, life, config.seed)
+    if config.from_maps is not None and m.strategy == "causal":
+        from copi.online import CausalStrategy
+
+        agent.steering.causal = CausalStrategy.load(
+            causal_map_path(config.from_maps, name, config.family, life, config.seed),
+            world=ident, capabilities=config.capabilities_sha,
+        )  # fmt: skip
     origin = sims[0].position.copy()
     rows = []
     for t, (base, optimal) in enumerate(zip(sims, optima, strict=True)):
@@ -266,9 +305,8 @@ def live(
         causal = getattr(steering, "causal", None)
         if causal is not None:
             Path(config.maps).mkdir(parents=True, exist_ok=True)
-            ident = world_identity(config.family, life, config.seed)
-            causal.save(Path(config.maps) / f"{name}-{ident}.npz", world=ident,
-                        capabilities=config.capabilities_sha)  # fmt: skip
+            causal.save(causal_map_path(config.maps, name, config.family, life, config.seed),
+                        world=ident, capabilities=config.capabilities_sha)  # fmt: skip
     return rows
 
 

@@ -6,7 +6,7 @@ import pytest
 from copi.errors import InvalidArgumentError
 from copi.experiments._episode import make_task, run_agent
 from copi.experiments.methods import make_agent
-from copi.online import Mapping, Steering
+from copi.online import Mapping, Observation, Steering
 from copi.world import Simulator
 from tests.baselines._support import TRAP_GOAL, route_length
 from tests.common import U_TRAP
@@ -78,3 +78,48 @@ def test_mapping_uses_only_the_sensor_level() -> None:
 def test_bad_parameters(kwargs: dict, message: str) -> None:
     with pytest.raises(InvalidArgumentError, match=message):
         Mapping(**kwargs)
+
+
+def test_walls_learnt_on_the_grid_give_a_static_reading() -> None:
+    m = Mapping()
+    m.reset(32, 10.0, 0.3)
+    here = np.array([0.3, -0.2])
+    wall = np.full(32, 10.0)
+    wall[8] = 4.0  # a wall 4 north
+    disc = wall.copy()
+    disc[0] = 3.0  # and, for a few steps, a disc 3 east
+    for _ in range(3):
+        m.update(disc, here)
+    for _ in range(30):
+        m.update(wall, here)
+    s = m.static_reading(here)
+    # Never beyond the wall's face, within a cell and a step of it.
+    assert 4.0 - m.cell - 0.1 <= s[8] <= 4.0
+    assert s[0] == 10.0  # the disc passed: no wall east
+    assert (np.delete(s, [7, 8, 9]) == 10.0).all()
+    # A wall seen a few times only is not yet learnt.
+    fresh = Mapping()
+    fresh.reset(32, 10.0, 0.3)
+    for _ in range(5):
+        fresh.update(wall, here)
+    assert fresh.static_reading(here)[8] == 10.0
+
+
+def test_the_learnt_static_reading_is_handed_on_in_a_life_only() -> None:
+    sim = _trap()
+    life = make_task(sim, "sensor", "mapping", lifelong=True)
+    s = Steering()
+    s.reset(life)
+    obs = Observation(ranges=sim.ranges.copy(), goal=sim.goal - sim.position,
+                      odometry=np.zeros(2))  # fmt: skip
+    for _ in range(25):
+        s.aim(obs)
+    seen = s.observe(obs)
+    assert seen.static is not None and seen.static.min() < 10.0
+    assert (seen.static <= obs.ranges + 1e-9).all()  # walls only: never beyond a hit
+    one = Steering()
+    one.reset(make_task(sim, "sensor", "mapping"))
+    plain = Observation(ranges=sim.ranges.copy(), goal=sim.goal - sim.position)
+    for _ in range(25):
+        one.aim(plain)
+    assert one.observe(plain) is plain  # one episode: nothing learnt is handed on

@@ -71,6 +71,7 @@ class Steered:
 
     def act(self, obs: Observation) -> NDArray[np.float64]:
         desired, reach = self.steering.aim(obs)
+        obs = self.steering.observe(obs)
         return self.steer(obs, np.asarray(desired, dtype=np.float64), float(reach))
 
     def steer(

@@ -21,6 +21,7 @@ information (it may ignore part of it, as a method of level ``sensor`` does at `
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Any, Protocol
@@ -159,18 +160,24 @@ class Steering:
     global direction, and only its local behaviour differs.
 
     In a lifelong run (``Task.lifelong``) the map and the causal map are kept from one
-    task to the next, in the frame of the agent's odometry.
+    task to the next, in the frame of the agent's odometry, and the walls learnt on the
+    map stand in for the static reading a ``map``-level method is handed
+    (:meth:`observe`, :meth:`Mapping.static_reading`): what the agent's life taught it.
     """
 
     def __init__(self) -> None:
         self.route: Route | None = None
         self.mapping: Mapping | None = None
         self.causal: Any = None
+        self.lifelong = False
+        self._learnt_static: NDArray[np.float64] | None = None
 
     def reset(self, task: Task) -> None:
         from copi.online._causal import CausalStrategy
 
         self.route = None
+        self.lifelong = task.lifelong
+        self._learnt_static = None
         if task.world is not None and task.start is not None and task.goal is not None:
             self.mapping = self.causal = None
             self.route = Route()
@@ -198,11 +205,25 @@ class Steering:
         if self.route is not None and obs.position is not None:
             return self.route.aim(obs.position)
         if self.causal is not None:
-            return self.causal.aim(obs, context)  # type: ignore[no-any-return]
-        if self.mapping is not None:
-            return self.mapping.aim(obs.ranges, obs.goal, obs.odometry)
-        g = obs.goal
-        return np.asarray(g, dtype=np.float64), math.hypot(g[0], g[1])
+            out: tuple[NDArray[np.float64], float] = self.causal.aim(obs, context)
+            grid = self.causal.mapping
+        elif self.mapping is not None:
+            out = self.mapping.aim(obs.ranges, obs.goal, obs.odometry)
+            grid = self.mapping
+        else:
+            g = obs.goal
+            return np.asarray(g, dtype=np.float64), math.hypot(g[0], g[1])
+        if self.lifelong and obs.static is None:
+            here = -np.asarray(obs.goal) if obs.odometry is None else obs.odometry
+            self._learnt_static = grid.static_reading(here)
+        return out
+
+    def observe(self, obs: Observation) -> Observation:
+        """``obs``, with the static reading of the walls learnt in a lifelong run where the
+        level gives none (call after :meth:`aim`, which folds the reading in first)."""
+        if obs.static is not None or self._learnt_static is None:
+            return obs
+        return dataclasses.replace(obs, static=self._learnt_static)
 
     def finish(self, outcome: str) -> None:
         """Tell the strategy how the task ended ("success", "collision", "timeout")."""
@@ -262,6 +283,7 @@ class CopiAgent:
 
     def act(self, obs: Observation) -> NDArray[np.float64]:
         desired, reach = self.steering.aim(obs)
+        obs = self.steering.observe(obs)
         static = obs.static if self.guard > 0 else None
         action, self.last_decision = self.controller.decide(
             obs.ranges, desired, reach=reach, static=static, explain=self.explain

@@ -440,7 +440,7 @@ class CausalStrategy:
         every: int = 25,
         lookahead: float = 6.0,
         margin: int = 3,
-        slack: float = 3.0,
+        slack: float = 8.0,
     ) -> None:
         self.map = causal_map or CausalMap()
         self.mapping = mapping or Mapping(extent=self.map.extent)

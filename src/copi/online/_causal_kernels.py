@@ -1,13 +1,17 @@
-"""Compiled inference over the causal map: which options the static map allows, and value
-iteration over places with the observed outcome probabilities.
+"""Compiled inference over the causal map (which options the static map allows, value
+iteration over places with the observed outcome probabilities) and the ray cast of the
+walls an agent has learnt on its occupancy grid.
 
-Why by hand: both are loops over a few hundred places, eight options each and a handful
-of outcomes, run every few decisions; scipy's graph routines take no outcome
+Why by hand: the first two are loops over a few hundred places, eight options each and a
+handful of outcomes, run every few decisions; scipy's graph routines take no outcome
 distributions, and in numpy each of the small steps would cost more in call overhead
-than the loop itself.
+than the loop itself. The cast runs every step: 32 short marches, a few microseconds
+compiled.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 from numba import njit
@@ -152,3 +156,26 @@ def option_values(  # type: ignore[no-untyped-def]
             break
     return sweeps
 
+
+
+@njit(cache=True)
+def cast_grid(occupancy, hits, level, min_hits, x, y, cell, extent, cos, sin, max_range, step,  # type: ignore[no-untyped-def]
+              out):  # fmt: skip
+    """out[i] = distance along ray i from (x, y) to the first wall cell of the grid
+    (side ``cell``, corner at (-extent, -extent)): a cell whose ``occupancy`` is at least
+    ``level`` and that was hit ``min_hits`` times. Marching in steps of ``step``, less one
+    step, so that it never exceeds the distance to the wall's face; ``max_range`` where
+    the ray meets none (or leaves the grid)."""
+    n = occupancy.shape[0]
+    for i in range(cos.shape[0]):
+        out[i] = max_range
+        t = step
+        while t <= max_range:
+            cx = int(math.floor((x + t * cos[i] + extent) / cell))
+            cy = int(math.floor((y + t * sin[i] + extent) / cell))
+            if cx < 0 or cy < 0 or cx >= n or cy >= n:
+                break
+            if occupancy[cy, cx] >= level and hits[cy, cx] >= min_hits:
+                out[i] = max(0.0, t - step)
+                break
+            t += step

@@ -123,6 +123,7 @@ class LearntAgent:
 
     def act(self, obs: Observation) -> NDArray[np.float64]:
         desired, reach = self.steering.aim(obs, self._context)
+        obs = self.steering.observe(obs)
         s = np.asarray(obs.ranges, dtype=np.float64)
         prev = s if self._prev is None else self._prev
         static = self._no_static if obs.static is None else obs.static

@@ -11,6 +11,7 @@ from scipy.ndimage import binary_dilation
 
 from copi.errors import InvalidArgumentError
 from copi.geometry import ring_angles
+from copi.online._causal_kernels import cast_grid
 from copi.planning._grid import GridPlanner
 
 __all__ = ["Mapping"]
@@ -53,6 +54,12 @@ class Mapping:
         How far along the path the strategy aims.
     join : float
         Neighbouring rays' hits nearer than this to each other are joined into a wall.
+    wall_level, wall_hits : float, int
+        A cell counts as a *learnt wall* when its occupancy is at least ``wall_level``
+        and it has been hit ``wall_hits`` times in all (a moving obstacle passes; a wall
+        is seen again and again). :meth:`static_reading` casts the ring on those cells:
+        the reading the walls alone would give, as far as the agent has learnt them,
+        which is what a ``map``-level method is handed as the static reading.
     """
 
     name = "mapping"
@@ -62,10 +69,12 @@ class Mapping:
         *,
         cell: float = 0.5,
         extent: float = 80.0,
-        margin: float = 0.25,
+        margin: float = 0.0,
         every: int = 25,
         lookahead: float = 4.0,
         join: float = 2.0,
+        wall_level: float = 3.5,
+        wall_hits: int = 20,
     ) -> None:
         for key, v in (("cell", cell), ("extent", extent), ("lookahead", lookahead)):
             if not (math.isfinite(v) and v > 0):
@@ -80,6 +89,8 @@ class Mapping:
         self.every = int(every)
         self.lookahead = float(lookahead)
         self.join = float(join)
+        self.wall_level = float(wall_level)
+        self.wall_hits = int(wall_hits)
 
     def reset(
         self, n_rays: int, max_range: float, agent_radius: float, *, keep: bool = False
@@ -90,9 +101,13 @@ class Mapping:
         if not (keep and getattr(self, "n", None) == n):
             self.n = n
             self.occupancy = np.zeros((n, n))
+            self.hits = np.zeros((n, n), dtype=np.int64)
             self.planner = GridPlanner(np.ones((n, n), dtype=bool))
         angles = ring_angles(n_rays)
         self._dirs = np.column_stack([np.cos(angles), np.sin(angles)])
+        self._cos = np.ascontiguousarray(self._dirs[:, 0])
+        self._sin = np.ascontiguousarray(self._dirs[:, 1])
+        self._static = np.empty(n_rays)
         self.max_range = float(max_range)
         grow = int(math.ceil((agent_radius + self.margin) / self.cell))
         yy, xx = np.mgrid[-grow : grow + 1, -grow : grow + 1]
@@ -132,6 +147,20 @@ class Mapping:
         seg = ends[join, None, :] + t[None, :, None] * (ends[nxt][join] - ends[join])[:, None, :]
         cells = self._index(np.concatenate([ends[hit], seg.reshape(-1, 2)]))
         occ[cells[:, 1], cells[:, 0]] = np.minimum(occ[cells[:, 1], cells[:, 0]] + _HIT, _CEIL)
+        self.hits[cells[:, 1], cells[:, 0]] += 1
+
+    def walls(self) -> NDArray[np.bool_]:
+        """The cells the agent has learnt to be walls (see the class)."""
+        return (self.occupancy >= self.wall_level) & (self.hits >= self.wall_hits)
+
+    def static_reading(self, position: Any) -> NDArray[np.float64]:
+        """The ring's reading at ``position`` (the grid's frame) of the learnt walls alone:
+        never farther than the wall's face, the maximum range where no wall is known."""
+        p = np.asarray(position, dtype=np.float64)
+        cast_grid(self.occupancy, self.hits, self.wall_level, self.wall_hits, p[0], p[1],
+                  self.cell, self.extent, self._cos, self._sin, self.max_range, 0.1,
+                  self._static)  # fmt: skip
+        return self._static.copy()
 
     def _blocked(self) -> NDArray[np.bool_]:
         return binary_dilation(self.occupancy > 0.0, structure=self._disc)

@@ -204,3 +204,11 @@ def test_a_template_with_no_policy_falls_back_to_the_compass(small_caps) -> None
     action2, info2 = ctl.decide(s2, [1.0, 0.0], explain=True)
     assert info2 is not None and info2.choice is not None
     assert action2[0] < 0.9
+
+
+def test_continual_growth_rate_is_checked() -> None:
+    from copi.learning import LearnParams, learn
+
+    caps = learn(LearnParams(worlds=2, steps=40, seed=0))
+    with pytest.raises(InvalidArgumentError, match="grow_every must be a positive int; got 0"):
+        ContextController(caps, continual=True, grow_every=0)

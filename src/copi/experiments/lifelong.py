@@ -89,6 +89,11 @@ LIFELONG_METHODS: dict[str, LifelongMethod] = {
 """Experiment 3's methods, copi's first."""
 
 
+GROW_EVERY = 20
+"""Unfamiliar readings per context grown, for the continual methods (see
+:class:`~copi.online.LearntAgent`)."""
+
+
 def parse_lifelong_methods(text: str | None) -> tuple[str, ...]:
     """``"copi-learnt+causal,dwa+mapping"`` -> names; None: all of them."""
     if text is None:
@@ -258,7 +263,7 @@ def _agent(config: LifelongConfig, name: str) -> Any:
     if spec.capabilities is not None:
         assert config.capabilities is not None
         caps = _capabilities(config.capabilities, config.capabilities_sha)
-    params = {"continual": True} if m.continual else {}
+    params = {"continual": True, "grow_every": GROW_EVERY} if m.continual else {}
     return make_agent(m.method, caps, **params)
 
 

@@ -73,6 +73,9 @@ class ContextController:
         twice the mean quantisation error for files that lack it.
     continual : bool
         Learn unfamiliar contexts as they come.
+    grow_every : int
+        In continual mode, the second map inserts a node every ``grow_every``
+        unfamiliar readings (its GNG's lambda).
     guard : float
         0 (the paper's chain, the default) or a clearance: a candidate policy is then kept
         only if, after its step, the live reading's hit points are all at least ``guard``
@@ -90,6 +93,7 @@ class ContextController:
         threshold: float | None = None,
         continual: bool = False,
         guard: float = 0.0,
+        grow_every: int = 20,
     ) -> None:
         caps = capabilities
         self.capabilities = caps
@@ -109,6 +113,9 @@ class ContextController:
                 f"threshold must be >= 0 (inf: all familiar); got {threshold!r}"
             )
         self.continual = bool(continual)
+        if int(grow_every) != grow_every or grow_every < 1:
+            raise InvalidArgumentError(f"grow_every must be a positive int; got {grow_every!r}")
+        self.grow_every = int(grow_every)
         if not (isinstance(guard, int | float) and math.isfinite(guard) and guard >= 0):
             raise InvalidArgumentError(f"guard must be a finite number >= 0; got {guard!r}")
         self.guard = float(guard)
@@ -320,7 +327,8 @@ class ContextController:
             self._pending.append(s)
             if len(self._pending) < 2:
                 return self._nodes, self._cand, self._ok
-            self._extra = GrowingNeuralGas(max_nodes=200, lambda_=20, random_state=0)
+            self._extra = GrowingNeuralGas(max_nodes=200, lambda_=self.grow_every,
+                                           random_state=0)  # fmt: skip
             self._extra.partial_fit(np.array(self._pending))
         else:
             self._extra.partial_fit(s[None])

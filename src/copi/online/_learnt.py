@@ -52,6 +52,8 @@ class LearntAgent:
         §III: GNG learning reinstated), each new node given the landmark and symmetry
         that fit it best (as :class:`~copi.online.ContextController` does); in a lifelong
         run the grown contexts are kept from task to task.
+    grow_every : int
+        Unfamiliar readings per node grown (the second map's GNG lambda).
     """
 
     sensing = "sensor"
@@ -66,6 +68,7 @@ class LearntAgent:
         beta: float = 0.0,
         wait: bool = True,
         continual: bool = False,
+        grow_every: int = 20,
         safety: SafetyModel | None = None,
     ) -> None:
         model = safety if safety is not None else capabilities.safety
@@ -96,6 +99,7 @@ class LearntAgent:
         self.n_decisions = 0
         self.n_unfamiliar = 0
         self.continual = bool(continual)
+        self.grow_every = int(grow_every)
         self.threshold = float(capabilities.stats.get("familiarity_threshold", np.inf))
         self._templates = np.asarray(capabilities.node_template, dtype=np.int64)
         self._growth: ContextController | None = None
@@ -150,7 +154,8 @@ class LearntAgent:
     def _grow(self, s: NDArray[np.float64]) -> None:
         """Learn an unfamiliar reading into the grown part of the context map."""
         if self._growth is None:
-            self._growth = ContextController(self.capabilities, continual=True)
+            self._growth = ContextController(self.capabilities, continual=True,
+                                             grow_every=self.grow_every)  # fmt: skip
         nodes, _, _ = self._growth._learn_unfamiliar(s)
         if len(nodes) == len(self._nodes):
             return

@@ -4,10 +4,11 @@ Goal (issue: the causal map and lifelong learning): updating the causal map and 
 with it <= 20 µs per decision. Measured over a real life (one indoor world, 12 tasks, the
 learnt preset with the causal strategy): every call of the map's update (recording an
 option's outcome) and choice (the option values at a state) is timed, and their total is
-divided by the decisions made; the median of three runs of the same life. Beside it, for scale, the inference (plausible options
-from the grid and value iteration, run at new tasks, surprises and every 25 steps) and
-the whole global strategy per decision against the ``mapping`` strategy's on the same
-tasks (its grid updates and A* plans), as a ratio in the same process.
+divided by the decisions made; the median of three runs of the same life. Beside it,
+for scale, the inference (plausible options from the grid and value iteration, run at
+new tasks, surprises and every 25 steps) and the whole global strategy per decision
+against the ``mapping`` strategy's on the same tasks (its grid updates and A* plans), as
+a ratio in the same process.
 """
 
 from __future__ import annotations

@@ -9,12 +9,12 @@ import zipfile
 import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import IO, Any
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from copi._files import atomic_write
+from copi._files import write_npz
 from copi.errors import CapabilitiesFormatError
 from copi.learning._policies import ActionPriors, PolicySet
 from copi.learning._safety import SafetyModel
@@ -173,17 +173,7 @@ class Capabilities:
         }
         arrays = self._arrays()
         arrays["metadata"] = np.array(json.dumps(meta, sort_keys=True))
-
-        def write(fh: IO[bytes]) -> None:
-            with zipfile.ZipFile(fh, "w", compression=zipfile.ZIP_DEFLATED) as zf:
-                for name, arr in arrays.items():
-                    info = zipfile.ZipInfo(f"{name}.npy", date_time=(1980, 1, 1, 0, 0, 0))
-                    info.compress_type = zipfile.ZIP_DEFLATED
-                    info.external_attr = 0o644 << 16
-                    with zf.open(info, "w", force_zip64=True) as member:
-                        np.lib.format.write_array(member, np.asarray(arr), allow_pickle=False)
-
-        return atomic_write(path, write)
+        return write_npz(path, arrays)
 
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> Capabilities:
@@ -344,6 +334,12 @@ def _check_consistent(p: Path, c: Capabilities) -> None:
         problems.append(f"the map's readings have {dim} rays but its sensor {rays}")
     if c.edges.size and (c.edges.min() < 0 or c.edges.max() >= n):
         problems.append("edges refer to missing nodes")
+    # Nodes and landmarks are readings (ranges within the sensor's reach): a value far
+    # outside would overflow the online search's arithmetic.
+    reach = float(c.params.get("max_range", 10.0))
+    for what, pts in (("nodes", c.nodes), ("landmark points", c.landmarks.points)):
+        if pts.size and not (np.abs(pts) <= 10.0 * reach).all():
+            problems.append(f"{what} lie beyond 10 x the sensor's range {reach:g}")
     if c.landmarks.points.shape != (L, dim):
         problems.append(
             f"landmark points have shape {c.landmarks.points.shape}, expected ({L}, {dim})"

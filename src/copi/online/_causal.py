@@ -29,12 +29,12 @@ import os
 import zipfile
 import zlib
 from pathlib import Path
-from typing import IO, Any
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from copi._files import atomic_write
+from copi._files import write_npz
 from copi.errors import CopiError, InvalidArgumentError
 from copi.online._causal_kernels import OFFSETS, option_values, plausible_options
 from copi.online._mapping import Mapping
@@ -286,16 +286,7 @@ class CausalMap:
             "capabilities": capabilities,
         }
         arrays["metadata"] = np.array(json.dumps(meta, sort_keys=True))
-
-        def write(fh: IO[bytes]) -> None:
-            with zipfile.ZipFile(fh, "w", compression=zipfile.ZIP_DEFLATED) as zf:
-                for name, arr in arrays.items():
-                    info = zipfile.ZipInfo(f"{name}.npy", date_time=(1980, 1, 1, 0, 0, 0))
-                    info.compress_type = zipfile.ZIP_DEFLATED
-                    with zf.open(info, "w") as member:
-                        np.lib.format.write_array(member, np.asarray(arr), allow_pickle=False)
-
-        return atomic_write(path, write)
+        return write_npz(path, arrays)
 
     @classmethod
     def load(

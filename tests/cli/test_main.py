@@ -225,7 +225,7 @@ def test_pursuit_command(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> 
     )
     assert code == 0 and "capability-static: 3 games" in out, err
     code, _, err = run(["pursuit", str(caps), "-o", str(results), "--evader", "ghost"], capsys)
-    assert code == 2 and "evader must be 'capability' or 'game'" in err and "Traceback" not in err
+    assert code == 2 and "evader must be one of capability, learnt, game; got 'ghost'" in err and "Traceback" not in err
 
 
 def test_presets_set_a_mode_whole(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -265,6 +265,12 @@ def test_presets_set_a_mode_whole(tmp_path: Path, capsys: pytest.CaptureFixture[
         (["evaluate", str(caps), "-o", str(tmp_path / "z.sqlite"), "--preset", "learnt"],
          f"{caps} has no safety priors; preset learnt needs them: learn it with copi learn "
          "--preset learnt"),
+        (["pursuit", str(caps), "-o", str(tmp_path / "z.sqlite"), "--preset", "learnt"],
+         f"{caps} has no safety priors; preset learnt needs them"),
+        (["pursuit", str(caps), "-o", str(tmp_path / "z.sqlite"), "--evader", "learnt"],
+         f"{caps} has no safety priors; preset learnt needs them"),
+        (["pursuit", str(caps), "-o", str(tmp_path / "z.sqlite"), "--evader", "learnt",
+          "--preset", "extended"], "--evader learnt needs --preset learnt, not extended"),
     ]:  # fmt: skip
         code, _, err = run(args, capsys)
         assert code == 2 and message in " ".join(err.split()), err

@@ -60,6 +60,22 @@ def test_the_game_evader_meets_obstacles_the_capability_evader_avoids(caps_path:
     assert touched_capa <= touched_game
 
 
+def test_the_learnt_evader_plays_the_game_through_the_learnt_preset(tmp_path: Path) -> None:
+    learnt = tmp_path / "learnt.npz"
+    learn(LearnParams(worlds=6, steps=150, directions=16, safety=True, probe_worlds=6,
+                      probe_steps=60, seed=1)).save(learnt)  # fmt: skip
+    cfg = PursuitConfig(str(learnt), evader="learnt", guard=1.05, games=8, horizon=150)
+    cfg = cfg.resolved()
+    assert cfg.method == "learnt-dynamic"
+    rows = [run_game(cfg, k) for k in range(8)]
+    assert rows[3] == run_game(cfg, 3)  # a game depends on its index only
+    game = PursuitConfig(str(learnt), evader="game", games=8, horizon=150).resolved()
+    touched_game = sum(run_game(game, k).contacts for k in range(8))
+    assert sum(r.contacts for r in rows) <= touched_game
+    # The learnt evader survives at least as long as the bare game's velocity, in total.
+    assert sum(r.survival for r in rows) >= sum(run_game(game, k).survival for k in range(8))
+
+
 def test_runner_store_and_fig5(caps_path: str, tmp_path: Path) -> None:
     out = tmp_path / "games.sqlite"
     for dynamic in (False, True):

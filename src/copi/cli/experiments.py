@@ -264,7 +264,9 @@ def pursuit_command(
         bool, typer.Option("--dynamic/--static", help="With or without moving obstacles.")
     ] = True,
     evader: Annotated[
-        str, typer.Option("--evader", help="capability (through the capabilities) or game.")
+        str,
+        typer.Option("--evader", help="capability (through the capabilities), learnt (through "
+                     "the learnt preset's agent) or game."),
     ] = "capability",
     seed: Annotated[int, typer.Option("--seed", min=0, help="Seed of the games.")] = 0,
     horizon: Annotated[int, typer.Option("--horizon", min=1, help="Steps to survive.")] = 300,
@@ -276,7 +278,8 @@ def pursuit_command(
     ] = None,
     preset: Annotated[
         str | None,
-        typer.Option("--preset", help="copi's mode: faithful or extended (sets the guard)."),
+        typer.Option("--preset", help="copi's mode: faithful, extended (set the guard) or "
+                     "learnt (the learnt evader and its guard)."),
     ] = None,
     contact_continues: Annotated[
         bool,
@@ -286,27 +289,32 @@ def pursuit_command(
     """Experiment 2 (paper §IV, Fig. 5): the homicidal chauffeur. A faster car with a
     turn radius chases the agent; the agent plays the game's strategy through its
     capabilities (or, with --evader game, directly). Resumable, like evaluate."""
+    from copi.errors import InvalidArgumentError
+    from copi.experiments.methods import check_preset_capabilities
     from copi.experiments.pursuit import PursuitConfig, pursue
     from copi.experiments.report import summarize_games
     from copi.experiments.store import ResultsStore
+    from copi.learning import Capabilities
 
     if preset is not None:
-        from copi.errors import InvalidArgumentError
-
-        if preset == "learnt":
-            raise InvalidArgumentError(
-                "pursuit runs the faithful and extended presets; the learnt preset is not "
-                "in Experiment 2 yet"
-            )
-        from copi.experiments.methods import check_preset_capabilities
         from copi.experiments.methods import preset as get_preset
-        from copi.learning import Capabilities
 
         want = get_preset(preset).guard
         check_preset_capabilities(preset, Capabilities.load(capabilities), str(capabilities))
         if guard is not None and guard != want:
             raise InvalidArgumentError(f"--guard {guard} contradicts --preset {preset} ({want})")
         guard = want
+        if preset == "learnt":
+            if evader == "game":
+                raise InvalidArgumentError(
+                    "--evader game plays no capabilities; --preset learnt sets the learnt evader"
+                )
+            evader = "learnt"
+        elif evader == "learnt":
+            raise InvalidArgumentError(f"--evader learnt needs --preset learnt, not {preset}")
+    elif evader == "learnt":
+        check_preset_capabilities("learnt", Capabilities.load(capabilities), str(capabilities))
+        guard = 1.05 if guard is None else guard
     guard = 1.2 if guard is None else guard
     config = PursuitConfig(
         capabilities=str(capabilities), evader=evader, dynamic=dynamic, games=games,

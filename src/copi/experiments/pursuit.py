@@ -16,10 +16,14 @@ from copi.experiments.navigation import _capabilities
 from copi.games import ChauffeurParams
 from copi.games._world_game import ChauffeurGame
 from copi.geometry._arrays import positive_int
-from copi.online import ContextController
+from copi.online import ContextController, LearntAgent, Observation, Task
 from copi.world import RangeSensor
 
-__all__ = ["GameRow", "PursuitConfig", "pursue", "run_game", "run_games"]
+__all__ = ["EVADERS", "GameRow", "PursuitConfig", "pursue", "run_game", "run_games"]
+
+
+EVADERS = ("capability", "learnt", "game")
+"""How the evader plays the game's direction (see :attr:`PursuitConfig.evader`)."""
 
 
 @dataclass(frozen=True)
@@ -30,7 +34,9 @@ class PursuitConfig(RunIdentity):
     """Capabilities file (its content hash enters the run id)."""
     evader: str = "capability"
     """"capability": the game's direction instantiated through the ContextController
-    (walls and obstacles avoided); "game": the game's direction as the velocity."""
+    (walls and obstacles avoided); "learnt": instantiated through the learnt preset's
+    agent (:class:`~copi.online.LearntAgent`, capabilities with safety priors); "game":
+    the game's direction as the velocity."""
     dynamic: bool = True
     """Moving obstacles (10-15) or a stationary world."""
     games: int = 100
@@ -41,7 +47,7 @@ class PursuitConfig(RunIdentity):
     """Time steps the evader must survive."""
     guard: float = 1.2
     """The capability evader's guard (see ContextController); as Experiment 1's extended
-    mode."""
+    mode (the learnt preset's is 1.05)."""
     gamma: float = 0.7
     """V_e / V_p (V_e = 1 agent step per time step)."""
     turn_radius: float = 4.0
@@ -55,9 +61,9 @@ class PursuitConfig(RunIdentity):
     capabilities_sha: str = field(default="", compare=False)
 
     def __post_init__(self) -> None:
-        if self.evader not in ("capability", "game"):
+        if self.evader not in EVADERS:
             raise InvalidArgumentError(
-                f"evader must be 'capability' or 'game'; got {self.evader!r}"
+                f"evader must be one of {', '.join(EVADERS)}; got {self.evader!r}"
             )
         for name in ("games", "horizon"):
             positive_int(getattr(self, name), name)
@@ -118,12 +124,19 @@ def run_game(config: PursuitConfig, k: int) -> GameRow:
     controller = (
         ContextController(caps, guard=config.guard) if config.evader == "capability" else None
     )
+    learnt = _learnt_evader(caps, config, sensor) if config.evader == "learnt" else None
     while game.t < config.horizon and not game.captured:
         wish = game.evader_wish()
-        if controller is None:
+        static = sensor.scan(game.world, game.sim.position) if config.guard > 0 else None
+        if learnt is not None:
+            # The game's direction as a far goal (no slowing down for a near one).
+            norm = float(np.hypot(*wish))
+            far = np.asarray(wish, dtype=np.float64) * (1e3 / norm) if norm > 0 else wish
+            obs = Observation(ranges=game.sim.ranges.copy(), goal=far, static=static)
+            velocity = learnt.act(obs)
+        elif controller is None:
             velocity = wish
         else:
-            static = sensor.scan(game.world, game.sim.position) if config.guard > 0 else None
             velocity, _ = controller.decide(game.sim.ranges, wish, static=static)
         game.step(velocity)
         if config.contact_ends and game.contacts and not game.captured:
@@ -160,6 +173,20 @@ def run_game(config: PursuitConfig, k: int) -> GameRow:
         outcome=outcome,
         trajectory=trajectory,
     )
+
+
+def _learnt_evader(caps: Any, config: PursuitConfig, sensor: RangeSensor) -> LearntAgent:
+    """The learnt preset's agent with its registered parameters and this run's guard,
+    told a task with no map (it is handed the static reading each step, as the
+    capability evader is)."""
+    from copi.experiments.methods import method_spec
+
+    p = method_spec("copi-learnt").params
+    agent = LearntAgent(caps, name="learnt-evader", guard=config.guard, alpha=float(p["alpha"]),
+                        beta=float(p["beta"]), wait=bool(p["wait"]))  # fmt: skip
+    agent.reset(Task(sensing="map", agent_radius=0.3, goal_tolerance=0.0,
+                     n_rays=sensor.n_rays, max_range=sensor.max_range))  # fmt: skip
+    return agent
 
 
 def run_games(config: PursuitConfig, games: list[int]) -> list[GameRow]:

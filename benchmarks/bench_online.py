@@ -63,7 +63,7 @@ def main() -> bool:
 
     learnt = learn(LearnParams(directions=16, safety=True))
     agent = LearntAgent(learnt)
-    args = (np.ascontiguousarray(agent.model.net), agent._nodes, agent._prior)
+    args = (agent._nodes, agent._prior, agent._net)
     static = np.full(caps.n_rays, np.inf)
     p, out, feat = np.empty(17), np.empty(5), np.empty(8 * caps.n_rays)
     cs, sn = agent._cos, agent._sin

@@ -130,3 +130,31 @@ def test_waiting_is_chosen_when_the_network_says_only_waiting_is_safe(learnt) ->
     assert np.allclose(v, [1.0, 0.0])  # all equally unsafe: the route decides
     with pytest.raises(InvalidArgumentError, match="finite"):
         agent.act(Observation(np.full(32, np.nan), np.array([5.0, 0.0])))
+
+
+@settings(max_examples=60, deadline=None)
+@given(data=st.data())
+def test_scoring_only_the_promising_directions_chooses_as_scoring_all(learnt, data) -> None:
+    from copi.online import _kernels
+
+    agent = LearntAgent(learnt, alpha=2.0, beta=data.draw(st.sampled_from([0.0, 0.5])),
+                        wait=False, guard=1.05)  # fmt: skip
+    s = data.draw(readings)
+    prev = np.clip(s + data.draw(st.floats(-1.0, 1.0)), 0.0, 10.0)
+    static = s + data.draw(st.sampled_from([0.0, 0.5, np.inf]))
+    aim = data.draw(st.tuples(st.floats(-5, 5), st.floats(-5, 5)))
+    # sharper networks too, so that probabilities near 1 (log near 0) occur
+    net = agent._net * data.draw(st.sampled_from([1.0, 20.0]))
+    outs = []
+    for lazy in (True, False):
+        out, p = np.empty(5), np.empty(17)
+        _kernels.decide_learnt(
+            s, prev, static, agent._nodes, agent._prior, net, aim[0], aim[1], 5.0, 1.05,
+            2.0, agent.beta, False, agent._cos, agent._sin, 10.0, np.empty(8 * 32), p, out,
+            lazy,
+        )  # fmt: skip
+        outs.append((out.copy(), p.copy()))
+    (a, pa), (b, pb) = outs
+    assert np.array_equal(a, b)
+    seen = ~np.isnan(pa)
+    assert np.array_equal(pa[seen], pb[seen])  # what it evaluated, it evaluated alike

@@ -43,6 +43,8 @@ __all__ = [
     "learn_safety",
     "probe_states",
     "safety_features",
+    "ring_features",
+    "safety_of",
     "safety_probabilities",
     "template_directions",
 ]
@@ -98,6 +100,37 @@ def safety_features(
 
 
 @njit(cache=True, fastmath=True)
+def ring_features(s, prev, feat):  # type: ignore[no-untyped-def]
+    """The feature blocks of reading ``s`` after ``prev`` into ``feat`` (8 n_rays), each
+    block written twice, so that turning the reading is a slice (see
+    :func:`safety_of`)."""
+    n = s.shape[0]
+    for b in range(N_BLOCKS):
+        for i in range(n):
+            v = _feature(s, prev, i, b)
+            feat[2 * b * n + i] = v
+            feat[2 * b * n + n + i] = v
+
+
+@njit(cache=True, fastmath=True)
+def safety_of(net, k, shift, feat, n):  # type: ignore[no-untyped-def]
+    """P(safe) by network ``k`` of ``net`` (0: a move along ray 0, 1: waiting) of the
+    features in ``feat`` (:func:`ring_features`) turned by ``shift`` rays."""
+    h = net.shape[1] - 1
+    z2 = net[k, h, 0]
+    for u in range(h):
+        z = net[k, u, 0]
+        for b in range(N_BLOCKS):
+            w0 = 1 + b * n
+            f0 = 2 * b * n + shift
+            for j in range(n):
+                z += net[k, u, w0 + j] * feat[f0 + j]
+        if z > 0.0:
+            z2 += net[k, h, 1 + u] * z
+    return 1.0 / (1.0 + math.exp(-z2))
+
+
+@njit(cache=True, fastmath=True)
 def safety_probabilities(s, prev, net, n_dir, feat, out):  # type: ignore[no-untyped-def]
     """P(safe) of each of ``n_dir`` compass directions (out[:n_dir]) and of waiting
     (out[n_dir]) for reading ``s`` after ``prev``.
@@ -111,26 +144,10 @@ def safety_probabilities(s, prev, net, n_dir, feat, out):  # type: ignore[no-unt
     leaves no room for numpy's per-call overhead on 17 small products."""
     n = s.shape[0]
     per = n // n_dir
-    for b in range(N_BLOCKS):
-        for i in range(n):
-            v = _feature(s, prev, i, b)
-            feat[2 * b * n + i] = v
-            feat[2 * b * n + n + i] = v
-    h = net.shape[1] - 1
-    for d in range(n_dir + 1):
-        k = 1 if d == n_dir else 0
-        shift = 0 if d == n_dir else d * per
-        z2 = net[k, h, 0]
-        for u in range(h):
-            z = net[k, u, 0]
-            for b in range(N_BLOCKS):
-                w0 = 1 + b * n
-                f0 = 2 * b * n + shift
-                for j in range(n):
-                    z += net[k, u, w0 + j] * feat[f0 + j]
-            if z > 0.0:
-                z2 += net[k, h, 1 + u] * z
-        out[d] = 1.0 / (1.0 + math.exp(-z2))
+    ring_features(s, prev, feat)
+    for d in range(n_dir):
+        out[d] = safety_of(net, 0, d * per, feat, n)
+    out[n_dir] = safety_of(net, 1, 0, feat, n)
 
 
 @dataclass(frozen=True, eq=False)

@@ -14,7 +14,7 @@ import numpy as np
 from numba import njit
 
 from copi.learning._gng_kernels import FAST
-from copi.learning._safety import safety_probabilities
+from copi.learning._safety import ring_features, safety_of, safety_probabilities
 
 
 @njit(cache=True, inline="always", fastmath=FAST)
@@ -280,7 +280,7 @@ def decide_batch(  # type: ignore[no-untyped-def]
 @njit(cache=True, fastmath=FAST)
 def decide_learnt(  # type: ignore[no-untyped-def]
     s, prev, static, nodes, node_prior, net, wx, wy, reach, guard, alpha, beta, wait,
-    cos, sin, max_range, feat, p, out,
+    cos, sin, max_range, feat, p, out, lazy=True,
 ):
     """One decision of the ``learnt`` preset: every compass direction (and, with
     ``wait``, standing still) scored by the global direction and the learnt safety
@@ -291,7 +291,15 @@ def decide_learnt(  # type: ignore[no-untyped-def]
     guard leaves no direction, the agent waits if the model says waiting is safer than
     every move that does not run into a hit, else escapes where most room is.
     out = (ax, ay, node, d2, choice): choice d, -2 the escape, -4 waiting, -1 nothing.
-    p (n_dir + 1,) receives the safety probabilities."""
+
+    Since the log terms are <= 0, cos(d, aim) bounds a direction's score: with ``lazy``
+    (and no waiting, which compares against every direction) directions are taken best
+    bound first, the guard and the network only for as long as a bound left can beat
+    the best score (all of them when the guard admits none: the fallback needs them),
+    with the same choice, ties to the lower index, as taking all. p (n_dir + 1,)
+    receives the safety probabilities evaluated (NaN for the rest)."""
+    for d in range(p.shape[0]):
+        p[d] = np.nan
     for i in range(s.shape[0]):
         if not (math.isfinite(s[i]) and s[i] >= 0.0 and math.isfinite(prev[i])):
             out[2] = -1.0
@@ -311,7 +319,13 @@ def decide_learnt(  # type: ignore[no-untyped-def]
         return
     ux = wx / norm
     uy = wy / norm
-    safety_probabilities(s, prev, net, n_dir, feat, p)
+    n = s.shape[0]
+    per = n // n_dir
+    all_p = wait or not lazy
+    if all_p:
+        safety_probabilities(s, prev, net, n_dir, feat, p)
+    else:
+        ring_features(s, prev, feat)
     now = np.inf
     for i in range(s.shape[0]):
         if s[i] < now:
@@ -326,27 +340,49 @@ def decide_learnt(  # type: ignore[no-untyped-def]
     # does not run into a hit is a fallback, the one ending farthest from moving hits.
     fallback = -1
     fallback_clear = -np.inf
+    along = np.empty(n_dir)
     for d in range(n_dir):
+        a0 = 2.0 * math.pi * d / n_dir
+        along[d] = math.cos(a0) * ux + math.sin(a0) * uy
+    left = np.ones(n_dir, dtype=np.bool_)
+    while True:
+        # the direction with the highest bound not yet seen (lower index first)
+        d = -1
+        top = -np.inf
+        for e in range(n_dir):
+            if left[e] and along[e] > top:
+                top = along[e]
+                d = e
+        if d < 0:
+            break
+        if not all_p and best >= 0 and top < best_score:
+            break  # no direction left can beat the best (nor is the fallback needed)
+        left[d] = False
         a0 = 2.0 * math.pi * d / n_dir
         ax = math.cos(a0)
         ay = math.sin(a0)
-        along = ax * ux + ay * uy
-        step = _step_length(along * reach, reach)
+        step = _step_length(top * reach, reach)
         end, sweep, sweep_all = _room(s, static, cos, sin, max_range, ax, ay, step)
         if guard <= 0.0:
             end = np.inf
             sweep = np.inf
-        if sweep_all >= wall and p[d] > free_p:
+        if all_p and sweep_all >= wall and p[d] > free_p:
             free_p = p[d]
         if end < guard or sweep < 0.5 * guard or sweep_all < wall:
-            if sweep_all >= wall and end > fallback_clear:
+            if sweep_all >= wall and (
+                end > fallback_clear or (end == fallback_clear and d < fallback)
+            ):
                 fallback_clear = end
                 fallback = d
             continue
-        score = along + alpha * math.log(max(p[d], 1e-9))
+        if top < best_score:
+            continue
+        if not all_p:
+            p[d] = safety_of(net, 0, d * per, feat, n)
+        score = top + alpha * math.log(max(p[d], 1e-9))
         if beta > 0.0:
             score += beta * math.log(max(node_prior[node, d], 1e-9))
-        if score > best_score:
+        if score > best_score or (score == best_score and d < best):
             best_score = score
             best = d
     if wait:

@@ -158,3 +158,33 @@ def test_scoring_only_the_promising_directions_chooses_as_scoring_all(learnt, da
     assert np.array_equal(a, b)
     seen = ~np.isnan(pa)
     assert np.array_equal(pa[seen], pb[seen])  # what it evaluated, it evaluated alike
+
+
+def test_a_batch_decides_as_one_agent_at_a_time(learnt) -> None:
+    from copi.learning import explore
+    from copi.online import _kernels
+
+    agent = LearntAgent(learnt, alpha=2.0, beta=0.5, wait=False, guard=1.05)
+    r = explore(2, 120, seed=5).readings
+    s, prev = r[1:101], r[:100]
+    rng = np.random.default_rng(1)
+    want = rng.normal(size=(100, 2))
+    want[7] = 0.0  # no direction: no motion
+    reach = rng.uniform(0.2, 20.0, 100)
+    static = np.where(rng.random((100, 32)) < 0.5, s, np.inf)
+    actions, nodes = agent.decide_batch(s, prev, want, reach, static)
+    for i in range(100):
+        out, p = np.empty(5), np.empty(17)
+        _kernels.decide_learnt(
+            s[i], prev[i], static[i], agent._nodes, agent._prior, agent._net, want[i, 0],
+            want[i, 1], reach[i], 1.05, 2.0, 0.5, False, agent._cos, agent._sin, 10.0,
+            np.empty(256), p, out,
+        )  # fmt: skip
+        assert np.array_equal(actions[i], out[:2]) and nodes[i] == out[2]
+    assert np.array_equal(actions[7], [0.0, 0.0])
+    with pytest.raises(InvalidArgumentError, match="previous readings must have shape"):
+        agent.decide_batch(s, prev[:3], want)
+    bad = s.copy()
+    bad[3, 4] = np.nan
+    with pytest.raises(InvalidArgumentError, match="readings must be finite"):
+        agent.decide_batch(bad, prev, want)

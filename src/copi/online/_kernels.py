@@ -300,15 +300,67 @@ def decide_learnt(  # type: ignore[no-untyped-def]
     receives the safety probabilities evaluated (NaN for the rest)."""
     for d in range(p.shape[0]):
         p[d] = np.nan
+    if not _learnt_inputs(s, prev, static, out):
+        return
+    node, d2 = _nearest(s, nodes)
+    _learnt_choose(
+        s, prev, static, node, d2, node_prior, net, wx, wy, reach, guard, alpha, beta, wait,
+        cos, sin, max_range, feat, p, out, lazy,
+    )  # fmt: skip
+
+
+@njit(cache=True, inline="always")
+def _learnt_inputs(s, prev, static, out):  # type: ignore[no-untyped-def]
+    """Whether the reading, the previous one and the static reading are usable; if not,
+    out[2] = -1 (ranges) or -2 (static)."""
     for i in range(s.shape[0]):
         if not (math.isfinite(s[i]) and s[i] >= 0.0 and math.isfinite(prev[i])):
             out[2] = -1.0
-            return
+            return False
         if not static[i] >= 0.0:
             out[2] = -2.0
-            return
+            return False
+    return True
+
+
+@njit(cache=True, fastmath=FAST)
+def decide_learnt_batch(  # type: ignore[no-untyped-def]
+    s, prev, static, nodes, screen, node_prior, net, want, reach, guard, alpha, beta, wait,
+    cos, sin, max_range, feat, p, out,
+):
+    """:func:`decide_learnt` for each row (lazy), out of shape (b, 5), with the
+    nearest-node search screened as :func:`decide_batch` screens it."""
+    for b in range(s.shape[0]):
+        x = s[b]
+        if not _learnt_inputs(x, prev[b], static[b], out[b]):
+            continue
+        row = screen[b]
+        m = np.inf
+        for i in range(row.shape[0]):
+            if row[i] < m:
+                m = row[i]
+        cut = m + 1e-3 * abs(m) + 1e-2
+        node = -1
+        bd = np.inf
+        for i in range(row.shape[0]):
+            if row[i] <= cut:
+                e = _exact(x, nodes, i)
+                if e < bd:
+                    bd = e
+                    node = i
+        _learnt_choose(
+            x, prev[b], static[b], node, bd, node_prior, net, want[b, 0], want[b, 1],
+            reach[b], guard, alpha, beta, wait, cos, sin, max_range, feat, p, out[b], True,
+        )  # fmt: skip
+
+
+@njit(cache=True, fastmath=FAST)
+def _learnt_choose(  # type: ignore[no-untyped-def]
+    s, prev, static, node, d2, node_prior, net, wx, wy, reach, guard, alpha, beta, wait,
+    cos, sin, max_range, feat, p, out, lazy,
+):
+    """The choice of :func:`decide_learnt` once the reading is recognised (node, d2)."""
     n_dir = node_prior.shape[1]
-    node, d2 = _nearest(s, nodes)
     out[0] = 0.0
     out[1] = 0.0
     out[2] = node

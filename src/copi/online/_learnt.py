@@ -93,6 +93,7 @@ class LearntAgent:
         self._feat = np.empty(8 * n)
         self._p = np.empty(self._prior.shape[1] + 1)
         self._out = np.empty(5)
+        self.max_range = float(capabilities.params.get("max_range", 10.0))
         self.steering = Steering()
         self._prev: NDArray[np.float64] | None = None
         self.n_waits = 0
@@ -150,6 +151,67 @@ class LearntAgent:
             if self.continual:
                 self._grow(s)
         return out[:2].copy()
+
+    def decide_batch(
+        self,
+        ranges: Any,
+        previous: Any,
+        desired: Any,
+        reach: Any = None,
+        static: Any = None,
+    ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+        """Velocities for many agents at once: row i is the decision :meth:`act` makes
+        for reading ``ranges[i]`` after ``previous[i]``, with the global direction
+        ``desired[i]`` (no global strategy here: it is given), within ``reach[i]`` (inf
+        by default), with ``static[i]`` as the static reading (none by default). The
+        nearest-node search is screened by one float32 matrix product. Returns
+        (actions (b, 2), nodes (b,))."""
+        n = self.capabilities.n_rays
+        s = np.ascontiguousarray(np.asarray(ranges, dtype=np.float64))
+        if s.ndim != 2 or s.shape[1] != n:
+            raise InvalidArgumentError(f"readings must have shape (b, {n}); got {s.shape}")
+        b = len(s)
+        prev = np.ascontiguousarray(np.asarray(previous, dtype=np.float64))
+        if prev.shape != s.shape:
+            raise InvalidArgumentError(
+                f"previous readings must have shape {s.shape}; got {prev.shape}"
+            )
+        want = np.ascontiguousarray(np.asarray(desired, dtype=np.float64))
+        if want.shape != (b, 2) or not np.isfinite(want).all():
+            raise InvalidArgumentError(
+                f"desired must be finite, of shape ({b}, 2); got shape {want.shape}"
+            )
+        r = np.full(b, np.inf) if reach is None else np.asarray(reach, dtype=np.float64)
+        if r.ndim == 0:
+            r = np.full(b, float(r))
+        if r.shape != (b,) or not (r >= 0).all():
+            raise InvalidArgumentError(f"reach must be >= 0, of shape ({b},)")
+        st = (
+            np.full(s.shape, np.inf)
+            if static is None
+            else np.ascontiguousarray(np.asarray(static, dtype=np.float64))
+        )
+        if st.shape != s.shape:
+            raise InvalidArgumentError(
+                f"static readings must have shape {s.shape}; got {st.shape}"
+            )
+        if getattr(self, "_nodes32", np.empty((0, 0))).shape != self._nodes.shape:
+            self._nodes32 = self._nodes.astype(np.float32)
+            self._norms32 = (self._nodes32 * self._nodes32).sum(1)
+        s32 = np.nan_to_num(s, nan=0.0, posinf=0.0, neginf=0.0).astype(np.float32)
+        screen = self._norms32[None, :] - 2.0 * (s32 @ self._nodes32.T)
+        screen += (s32 * s32).sum(1)[:, None]
+        out = np.empty((b, 5))
+        _kernels.decide_learnt_batch(
+            s, prev, st, self._nodes, np.ascontiguousarray(screen), self._prior, self._net,
+            want, np.ascontiguousarray(r), self.guard, self.alpha, self.beta, self.wait,
+            self._cos, self._sin, self.max_range, self._feat, self._p, out,
+        )  # fmt: skip
+        if (out[:, 2] == -1).any():
+            raise InvalidArgumentError("readings must be finite and >= 0 (and previous finite)")
+        if (out[:, 2] == -2).any():
+            raise InvalidArgumentError("static readings must be >= 0")
+        return out[:, :2].copy(), out[:, 2].astype(np.int64)
 
     def _grow(self, s: NDArray[np.float64]) -> None:
         """Learn an unfamiliar reading into the grown part of the context map."""

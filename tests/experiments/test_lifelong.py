@@ -240,3 +240,29 @@ def test_a_life_resumes_from_saved_maps_and_bad_maps_are_refused(
                        capsys)  # fmt: skip
     assert code == 2 and "not a complete causal map file" in err and "Traceback" not in err
     assert not (tmp_path / "c.sqlite").exists()
+
+
+def test_a_world_with_no_valid_tasks_is_recorded_as_skipped(
+    learnt: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import copi.experiments.lifelong as lifelong
+    from copi.errors import InvalidWorldError
+    from copi.experiments.lifelong_report import write_lifelong_report
+
+    real = lifelong.draw_life
+
+    def draw(family: str, life: int, *args: Any, **kwargs: Any) -> Any:
+        if life == 1:
+            raise InvalidWorldError("no two points 10 apart")
+        return real(family, life, *args, **kwargs)
+
+    monkeypatch.setattr(lifelong, "draw_life", draw)
+    cfg = LifelongConfig(learnt, worlds=2, tasks=2, methods=("compass-guard+mapping",))
+    out = tmp_path / "s.sqlite"
+    run_lifelong(cfg, out, workers=1)
+    rows = _rows(out)
+    assert [r["outcome"] for r in rows if r["life"] == 1] == ["skipped", "skipped"]
+    run_lifelong(cfg, out, workers=1)  # nothing left to do
+    assert _rows(out) == rows
+    text = write_lifelong_report(out, tmp_path / "s.md").read_text()
+    assert "1 worlds (lives)" in text  # the skipped life counts in no rate

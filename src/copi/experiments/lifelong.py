@@ -207,6 +207,8 @@ class LifeResult:
     family: str
     sensing: str
     outcome: str
+    """success, collision or timeout; "skipped" when the world has no valid chain of
+    tasks (the life's rows then count in no rate)."""
     success: bool
     steps: int
     path_length: float
@@ -323,10 +325,24 @@ def run_life(
     try:
         sims = draw_life(config.family, life, config.seed, config.tasks,
                          agent_radius=config.agent_radius)  # fmt: skip
-    except InvalidWorldError:
-        return [(rid, name, []) for rid, name in todo]
+    except InvalidWorldError:  # recorded as skipped, so that the run goes on (and ends)
+        return [(rid, name, _skipped(config, name, life)) for rid, name in todo]
     optima = [optimal_to_goal(s) for s in sims]
     return [(rid, name, live(config, name, life, sims, optima)) for rid, name in todo]
+
+
+def _skipped(config: LifelongConfig, name: str, life: int) -> list[LifeResult]:
+    """The rows of a life whose world has no valid chain of tasks (counted in no rate)."""
+    nan = math.nan
+    return [
+        LifeResult(
+            world=world_identity(config.family, life, config.seed), life=life, task=t,
+            seed=config.seed, family=config.family, sensing=LIFELONG_METHODS[name].sensing,
+            outcome="skipped", success=False, steps=0, path_length=nan, optimal_length=nan,
+            excess=nan, decision_us=nan, unfamiliar=nan, grown=0, options=0,
+        )  # fmt: skip
+        for t in range(config.tasks)
+    ]
 
 
 def run_lives(

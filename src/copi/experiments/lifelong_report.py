@@ -147,7 +147,7 @@ def write_lifelong_report(
     """Write Experiment 3's report (``markdown``, and a figure beside it with the same
     name and ``.png``) from the ``lifelong`` table of ``results``."""
     with ResultsStore(results, readonly=True) as store:
-        rows = store.lifelong()
+        rows = [r for r in store.lifelong() if r["outcome"] != "skipped"]
         runs = {r["run_id"]: r for r in store.runs() if r["experiment"] == "lifelong"}
     target = Path(markdown)
     if not rows:

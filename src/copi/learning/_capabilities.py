@@ -356,7 +356,11 @@ def _check_consistent(p: Path, c: Capabilities) -> None:
         problems.append("group arrays disagree in size")
     if c.reduction.template_of.shape != (L,) or (L and c.reduction.template_of.max() >= T):
         problems.append("reduction does not cover the landmarks")
-    if L and (c.reduction.element.min() < 0 or c.reduction.element.max() >= G):
+    if c.reduction.element.shape != (L,):
+        problems.append(
+            f"reduction elements have shape {c.reduction.element.shape}, expected ({L},)"
+        )
+    elif L and (c.reduction.element.min() < 0 or c.reduction.element.max() >= G):
         problems.append("reduction refers to missing group elements")
     if T and (c.reduction.templates.min() < 0 or c.reduction.templates.max() >= L):
         problems.append("templates refer to missing landmarks")

@@ -73,7 +73,7 @@ def main() -> bool:
         k = next(j) % 2000
         _kernels.decide_learnt(
             readings[k], readings[k - 1], static, *args, want[k, 0], want[k, 1], 5.0, 1.05,
-            2.0, 0.0, False, cs, sn, 10.0, feat, p, out,
+            2.0, 0.0, False, cs, sn, 10.0, feat, p, out, agent._landmarks, -1, -1, 0.0,
         )  # fmt: skip
 
     j = iter(range(1, 10**9))

@@ -145,13 +145,16 @@ def test_scoring_only_the_promising_directions_chooses_as_scoring_all(learnt, da
     aim = data.draw(st.tuples(st.floats(-5, 5), st.floats(-5, 5)))
     # sharper networks too, so that probabilities near 1 (log near 0) occur
     net = agent._net * data.draw(st.sampled_from([1.0, 20.0]))
+    keep = data.draw(st.integers(-1, 15))
+    persist = data.draw(st.sampled_from([0.0, 0.05, 0.5]))
+    prev_landmark = data.draw(st.integers(-1, int(agent._landmarks.max())))
     outs = []
     for lazy in (True, False):
         out, p = np.empty(5), np.empty(17)
         _kernels.decide_learnt(
             s, prev, static, agent._nodes, agent._prior, net, aim[0], aim[1], 5.0, 1.05,
             2.0, agent.beta, False, agent._cos, agent._sin, 10.0, np.empty(8 * 32), p, out,
-            lazy,
+            agent._landmarks, prev_landmark, keep, persist, lazy,
         )  # fmt: skip
         outs.append((out.copy(), p.copy()))
     (a, pa), (b, pb) = outs
@@ -178,7 +181,7 @@ def test_a_batch_decides_as_one_agent_at_a_time(learnt) -> None:
         _kernels.decide_learnt(
             s[i], prev[i], static[i], agent._nodes, agent._prior, agent._net, want[i, 0],
             want[i, 1], reach[i], 1.05, 2.0, 0.5, False, agent._cos, agent._sin, 10.0,
-            np.empty(256), p, out,
+            np.empty(256), p, out, agent._landmarks, -1, -1, 0.0,
         )  # fmt: skip
         assert np.array_equal(actions[i], out[:2]) and nodes[i] == out[2]
     assert np.array_equal(actions[7], [0.0, 0.0])
@@ -188,3 +191,31 @@ def test_a_batch_decides_as_one_agent_at_a_time(learnt) -> None:
     bad[3, 4] = np.nan
     with pytest.raises(InvalidArgumentError, match="readings must be finite"):
         agent.decide_batch(bad, prev, want)
+
+
+def test_a_policy_lasts_while_the_reading_stays_within_its_landmark(learnt) -> None:
+    from copi.online import _kernels
+
+    agent = LearntAgent(learnt, alpha=2.0, wait=False, guard=1.05, persist=0.05)
+    s = np.full(32, 10.0)  # open space: every direction safe alike
+    aim = (np.cos(np.radians(10.0)), np.sin(np.radians(10.0)))  # east (d 0) is best aligned
+    node = int(np.argmin(((agent._nodes - s) ** 2).sum(1)))
+    here = int(agent._landmarks[node])
+
+    def choose(prev_landmark: int, keep: int, persist: float) -> int:
+        out, p = np.empty(5), np.empty(17)
+        _kernels.decide_learnt(
+            s, s, np.full(32, np.inf), agent._nodes, agent._prior, agent._net, aim[0], aim[1],
+            5.0, 1.05, 2.0, 0.0, False, agent._cos, agent._sin, 10.0, np.empty(256), p, out,
+            agent._landmarks, prev_landmark, keep, persist,
+        )  # fmt: skip
+        return int(out[4])
+
+    assert choose(-1, -1, 0.0) == 0
+    # cos 12.5 deg (d 1) trails cos 10 deg by 0.009: a bonus of 0.05 keeps d 1 ...
+    assert choose(here, 1, 0.05) == 1
+    # ... but only within the same landmark, and not for a direction far off the aim
+    assert choose(here + 1, 1, 0.05) == 0
+    assert choose(here, 4, 0.05) == 0
+    with pytest.raises(InvalidArgumentError, match="persist must be a finite number >= 0"):
+        LearntAgent(learnt, persist=-1.0)

@@ -243,7 +243,8 @@ def make_agent(name: str, capabilities: Capabilities | None = None, **params: An
                                alpha=float(p["alpha"]), beta=float(p["beta"]),
                                wait=bool(p["wait"]),
                                continual=bool(p.get("continual", False)),
-                               grow_every=int(p.get("grow_every", 20)))  # fmt: skip
+                               grow_every=int(p.get("grow_every", 20)),
+                               persist=float(p.get("persist", 0.0)))  # fmt: skip
         return CopiAgent(capabilities, name=name, guard=float(p.get("guard", 0.0)),
                          continual=bool(p.get("continual", False)))  # fmt: skip
     if spec.optional and not navground_available():

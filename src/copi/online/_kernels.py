@@ -280,7 +280,8 @@ def decide_batch(  # type: ignore[no-untyped-def]
 @njit(cache=True, fastmath=FAST)
 def decide_learnt(  # type: ignore[no-untyped-def]
     s, prev, static, nodes, node_prior, net, wx, wy, reach, guard, alpha, beta, wait,
-    cos, sin, max_range, feat, p, out, lazy=True,
+    cos, sin, max_range, feat, p, out, node_landmark, prev_landmark, keep, persist,
+    lazy=True,
 ):
     """One decision of the ``learnt`` preset: every compass direction (and, with
     ``wait``, standing still) scored by the global direction and the learnt safety
@@ -297,15 +298,20 @@ def decide_learnt(  # type: ignore[no-untyped-def]
     bound first, the guard and the network only for as long as a bound left can beat
     the best score (all of them when the guard admits none: the fallback needs them),
     with the same choice, ties to the lower index, as taking all. p (n_dir + 1,)
-    receives the safety probabilities evaluated (NaN for the rest)."""
+    receives the safety probabilities evaluated (NaN for the rest).
+
+    Persistence (an option in the paper's sense, §V): while the reading stays within
+    the landmark of the previous decision (``node_landmark[node] == prev_landmark``),
+    direction ``keep`` (the previous choice) scores ``persist`` more."""
     for d in range(p.shape[0]):
         p[d] = np.nan
     if not _learnt_inputs(s, prev, static, out):
         return
     node, d2 = _nearest(s, nodes)
+    k = keep if node < node_landmark.shape[0] and node_landmark[node] == prev_landmark else -1
     _learnt_choose(
         s, prev, static, node, d2, node_prior, net, wx, wy, reach, guard, alpha, beta, wait,
-        cos, sin, max_range, feat, p, out, lazy,
+        cos, sin, max_range, feat, p, out, lazy, k, persist,
     )  # fmt: skip
 
 
@@ -351,15 +357,17 @@ def decide_learnt_batch(  # type: ignore[no-untyped-def]
         _learnt_choose(
             x, prev[b], static[b], node, bd, node_prior, net, want[b, 0], want[b, 1],
             reach[b], guard, alpha, beta, wait, cos, sin, max_range, feat, p, out[b], True,
+            -1, 0.0,
         )  # fmt: skip
 
 
 @njit(cache=True, fastmath=FAST)
 def _learnt_choose(  # type: ignore[no-untyped-def]
     s, prev, static, node, d2, node_prior, net, wx, wy, reach, guard, alpha, beta, wait,
-    cos, sin, max_range, feat, p, out, lazy,
+    cos, sin, max_range, feat, p, out, lazy, keep, persist,
 ):
-    """The choice of :func:`decide_learnt` once the reading is recognised (node, d2)."""
+    """The choice of :func:`decide_learnt` once the reading is recognised (node, d2),
+    direction ``keep`` (-1: none) scoring ``persist`` more."""
     n_dir = node_prior.shape[1]
     out[0] = 0.0
     out[1] = 0.0
@@ -393,17 +401,19 @@ def _learnt_choose(  # type: ignore[no-untyped-def]
     fallback = -1
     fallback_clear = -np.inf
     along = np.empty(n_dir)
+    bound = np.empty(n_dir)
     for d in range(n_dir):
         a0 = 2.0 * math.pi * d / n_dir
         along[d] = math.cos(a0) * ux + math.sin(a0) * uy
+        bound[d] = along[d] + persist if d == keep else along[d]
     left = np.ones(n_dir, dtype=np.bool_)
     while True:
         # the direction with the highest bound not yet seen (lower index first)
         d = -1
         top = -np.inf
         for e in range(n_dir):
-            if left[e] and along[e] > top:
-                top = along[e]
+            if left[e] and bound[e] > top:
+                top = bound[e]
                 d = e
         if d < 0:
             break
@@ -413,7 +423,7 @@ def _learnt_choose(  # type: ignore[no-untyped-def]
         a0 = 2.0 * math.pi * d / n_dir
         ax = math.cos(a0)
         ay = math.sin(a0)
-        step = _step_length(top * reach, reach)
+        step = _step_length(along[d] * reach, reach)
         end, sweep, sweep_all = _room(s, static, cos, sin, max_range, ax, ay, step)
         if guard <= 0.0:
             end = np.inf

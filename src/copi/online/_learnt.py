@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -54,6 +55,10 @@ class LearntAgent:
         run the grown contexts are kept from task to task.
     grow_every : int
         Unfamiliar readings per node grown (the second map's GNG lambda).
+    persist : float
+        Policies that last (an option in the paper's sense, §V): while the reading
+        stays within the landmark of the previous decision, the previous direction
+        scores this much more (0: every step chooses afresh).
     """
 
     sensing = "sensor"
@@ -69,6 +74,7 @@ class LearntAgent:
         wait: bool = True,
         continual: bool = False,
         grow_every: int = 20,
+        persist: float = 0.0,
         safety: SafetyModel | None = None,
     ) -> None:
         model = safety if safety is not None else capabilities.safety
@@ -101,6 +107,13 @@ class LearntAgent:
         self.n_unfamiliar = 0
         self.continual = bool(continual)
         self.grow_every = int(grow_every)
+        if not (math.isfinite(persist) and persist >= 0):
+            raise InvalidArgumentError(f"persist must be a finite number >= 0; got {persist!r}")
+        self.persist = float(persist)
+        self._landmarks = np.ascontiguousarray(capabilities.landmarks.node_landmark,
+                                               dtype=np.int64)  # fmt: skip
+        self._prev_landmark = -1
+        self._keep = -1
         self.threshold = float(capabilities.stats.get("familiarity_threshold", np.inf))
         self._templates = np.asarray(capabilities.node_template, dtype=np.int64)
         self._growth: ContextController | None = None
@@ -120,6 +133,8 @@ class LearntAgent:
         self.n_decisions = 0
         self.n_unfamiliar = 0
         self._context = -1
+        self._prev_landmark = -1
+        self._keep = -1
         if not task.lifelong and self._growth is not None:  # grown contexts: one life only
             self._growth = None
             self._nodes = np.ascontiguousarray(self.capabilities.nodes, dtype=np.float64)
@@ -136,7 +151,8 @@ class LearntAgent:
         _kernels.decide_learnt(
             s, prev, static, self._nodes, self._prior, self._net, desired[0], desired[1],
             reach, self.guard, self.alpha, self.beta, self.wait, self._cos, self._sin,
-            self.max_range, self._feat, self._p, out,
+            self.max_range, self._feat, self._p, out, self._landmarks, self._prev_landmark,
+            self._keep, self.persist,
         )  # fmt: skip
         if out[2] < 0:
             what = "not finite and >= 0" if out[2] == -1 else "static reading not >= 0"
@@ -146,6 +162,8 @@ class LearntAgent:
         self.n_waits += out[4] == -4.0
         node = int(out[2])
         self._context = int(self._templates[node])
+        self._prev_landmark = int(self._landmarks[node]) if node < len(self._landmarks) else -1
+        self._keep = int(out[4]) if out[4] >= 0 else -1
         if out[3] > self.threshold * self.threshold:
             self.n_unfamiliar += 1
             if self.continual:

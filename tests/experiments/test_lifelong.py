@@ -266,3 +266,39 @@ def test_a_world_with_no_valid_tasks_is_recorded_as_skipped(
     assert _rows(out) == rows
     text = write_lifelong_report(out, tmp_path / "s.md").read_text()
     assert "1 worlds (lives)" in text  # the skipped life counts in no rate
+
+
+def test_an_older_store_gains_the_lifelong_table_and_runs_are_reported_apart(
+    learnt: str, tmp_path: Path
+) -> None:
+    from copi.experiments.lifelong_report import write_lifelong_report
+
+    out = tmp_path / "old.sqlite"
+    with ResultsStore(out):
+        pass
+    with sqlite3.connect(out) as db:  # as a store written before Experiment 3
+        db.execute("DROP TABLE lifelong")
+    for family in ("indoor", "star"):
+        cfg = LifelongConfig(learnt, family=family, worlds=1, tasks=2,
+                             methods=("compass-guard+mapping",))  # fmt: skip
+        run_lifelong(cfg, out, workers=1)
+    rows = _rows(out)
+    assert len(rows) == 4 and {r["family"] for r in rows} == {"indoor", "star"}
+    text = write_lifelong_report(out, tmp_path / "r.md").read_text()
+    assert text.count("# Experiment 3") == 2  # two families' lives: never pooled
+    assert (tmp_path / "r.png").exists() and (tmp_path / "r-2.png").exists()
+
+
+def test_saved_maps_identify_a_run_whatever_its_worlds(learnt: str, tmp_path: Path) -> None:
+    maps = tmp_path / "maps"
+    first = LifelongConfig(learnt, worlds=2, tasks=1, methods=("copi-learnt+causal",),
+                           maps=str(maps))  # fmt: skip
+    run_lifelong(first, tmp_path / "a.sqlite", workers=1)
+    one = LifelongConfig(learnt, worlds=1, tasks=1, methods=("copi-learnt+causal",),
+                         from_maps=str(maps)).resolved()  # fmt: skip
+    two = LifelongConfig(learnt, worlds=2, tasks=1, methods=("copi-learnt+causal",),
+                         from_maps=str(maps)).resolved()  # fmt: skip
+    assert one.run_id("copi-learnt+causal") == two.run_id("copi-learnt+causal")
+    with pytest.raises(ValueError, match="--maps and --from-maps are both"):
+        LifelongConfig(learnt, worlds=1, tasks=1, methods=("copi-learnt+causal",),
+                       from_maps=str(maps), maps=str(maps)).resolved()  # fmt: skip

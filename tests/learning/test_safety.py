@@ -219,3 +219,25 @@ def test_a_policy_lasts_while_the_reading_stays_within_its_landmark(learnt) -> N
     assert choose(here, 4, 0.05) == 0
     with pytest.raises(InvalidArgumentError, match="persist must be a finite number >= 0"):
         LearntAgent(learnt, persist=-1.0)
+
+
+def test_grown_contexts_follow_their_map_and_weights_are_checked(learnt) -> None:
+    from copi.online import Observation, Task
+
+    agent = LearntAgent(learnt, continual=True, grow_every=50, wait=False)
+    agent.reset(Task("sensor", 0.3, 0.5, 32, 10.0))
+    agent.threshold = 3.0  # a tight familiarity: every noise reading below is unfamiliar
+    rng = np.random.default_rng(0)
+    base = len(learnt.nodes)
+    grown = []
+    for _ in range(60):  # noise readings: far from every context, and from each other
+        odd = rng.uniform(0.3, 10.0, 32)
+        agent.act(Observation(odd, np.array([5.0, 0.0])))
+        grown.append(agent._nodes[base:].copy())
+    assert agent.n_unfamiliar > 20
+    # Between insertions (every 50) the grown nodes keep moving, and the agent follows.
+    same_count = [(a, b) for a, b in zip(grown, grown[1:], strict=False) if len(a) == len(b) > 0]
+    assert same_count and any(not np.array_equal(a, b) for a, b in same_count)
+    for key in ("alpha", "beta"):
+        with pytest.raises(InvalidArgumentError, match=f"{key} must be a finite number >= 0"):
+            LearntAgent(learnt, **{key: -1.0})

@@ -257,3 +257,55 @@ def test_a_saved_life_resumes(tmp_path: Path) -> None:
                        origin=origin)  # fmt: skip
     assert second.outcome == "success"
     assert second.path_length < 0.8 * first.path_length
+
+
+def test_files_with_impossible_parameters_or_grids_are_refused(tmp_path: Path) -> None:
+    cmap = _small()
+    _hand_built(cmap)
+    path = cmap.save(tmp_path / "m.npz", occupancy=np.zeros((8, 8)),
+                     hits=np.ones((8, 8), dtype=np.int64))  # fmt: skip
+    with np.load(path) as z:
+        good = {k: z[k] for k in z.files}
+    import json
+
+    def with_meta(**params: object) -> Path:
+        meta = json.loads(str(good["metadata"][()]))
+        meta["params"].update(params)
+        bad = tmp_path / "bad.npz"
+        np.savez(bad, **{**good, "metadata": np.array(json.dumps(meta))})
+        return bad
+
+    for params, message in [
+        ({"extent": 1e12, "place": 1e-3}, "places a side; at most 2048"),
+        ({"patience": "abc"}, "bad parameters"),
+        ({"patience": float("inf")}, "bad parameters"),
+    ]:
+        with pytest.raises(CausalMapFormatError, match=message):
+            CausalMap.load(with_meta(**params))
+    bad = tmp_path / "bad.npz"
+    np.savez(bad, **{**good, "occupancy": np.array([["a", "b"], ["c", "d"]])})
+    with pytest.raises(CausalMapFormatError, match="occupancy is not a finite square grid"):
+        CausalMap.load(bad)
+    np.savez(bad, **{**good, "hits": -np.ones((8, 8), dtype=np.int64)})
+    with pytest.raises(CausalMapFormatError, match="hits are not counts"):
+        CausalMap.load(bad)
+    # A place the strategy's grid cannot tile: refused by the strategy's loader too.
+    odd = CausalMap(extent=80.0, place=0.7)
+    odd_path = odd.save(tmp_path / "odd.npz")
+    with pytest.raises(CausalMapFormatError, match="whole number of grid cells"):
+        CausalStrategy.load(odd_path)
+
+
+def test_a_resumed_life_keeps_its_learnt_walls(tmp_path: Path) -> None:
+    agent = make_agent("compass-guard")
+    origin = np.array(U_TRAP.start, dtype=float)
+    run_agent(agent, _trap(), sensing="sensor", max_steps=300, strategy="causal", origin=origin)
+    causal = agent.steering.causal
+    path = causal.save(tmp_path / "u.npz", world="u-trap")
+    back = CausalStrategy.load(path, world="u-trap")
+    back.reset(type("T", (), {"lifelong": True, "n_rays": 32, "max_range": 10.0,
+                              "agent_radius": 0.3})())  # fmt: skip
+    assert np.array_equal(back.mapping.occupancy, causal.mapping.occupancy)
+    assert np.array_equal(back.mapping.hits, causal.mapping.hits)
+    here = origin - origin
+    assert np.array_equal(back.mapping.static_reading(here), causal.mapping.static_reading(here))

@@ -154,10 +154,15 @@ class LifelongConfig:
         done = dataclasses.replace(self, capabilities_sha=file_sha(self.capabilities))
         if self.from_maps is None:
             return done
-        # Every map the run will start from, checked now (before anything is written).
-        from copi.online import CausalMap
+        if self.maps is not None and Path(self.maps).resolve() == Path(self.from_maps).resolve():
+            raise InvalidArgumentError(
+                f"--maps and --from-maps are both {self.from_maps}: save the maps elsewhere "
+                "(the run would overwrite what it starts from)"
+            )
+        # Every map the run will start from, checked now (before anything is written),
+        # as the strategy will load it.
+        from copi.online import CausalStrategy
 
-        h = hashlib.sha256()
         for name in self.methods:
             if LIFELONG_METHODS[name].strategy != "causal":
                 continue
@@ -168,9 +173,14 @@ class LifelongConfig:
                         f"{self.from_maps}: no causal map of {name} in world "
                         f"{world_identity(self.family, life, self.seed)} ({path.name})"
                     )
-                CausalMap.load(path, world=world_identity(self.family, life, self.seed),
-                               capabilities=done.capabilities_sha)  # fmt: skip
-                h.update(path.name.encode() + bytes.fromhex(file_sha(path)))
+                CausalStrategy.load(path, world=world_identity(self.family, life, self.seed),
+                                    capabilities=done.capabilities_sha)  # fmt: skip
+        # The run's identity: every map of this family and seed in the directory (not
+        # only those of the worlds asked for, so that more worlds extend the run).
+        h = hashlib.sha256()
+        pattern = f"*-{self.family}-life-*-seed-{self.seed}.npz"
+        for path in sorted(Path(self.from_maps).glob(pattern)):
+            h.update(path.name.encode() + bytes.fromhex(file_sha(path)))
         return dataclasses.replace(done, from_maps_sha=h.hexdigest())
 
     def identity(self, method: str) -> dict[str, Any]:

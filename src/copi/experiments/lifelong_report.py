@@ -154,9 +154,36 @@ def write_lifelong_report(
         target.write_text("# Experiment 3 — lifelong\n\nNo lifelong results yet.\n",
                           encoding="utf-8")  # fmt: skip
         return target
+    # One section per (family, seed, tasks): only runs of the same lives are compared.
+    groups: dict[tuple[str, int, int], list[str]] = {}
+    for rid, run in runs.items():
+        cfg = run["config"]
+        key = (str(cfg.get("family")), int(cfg.get("seed", 0)), int(cfg.get("tasks", 0)))
+        groups.setdefault(key, []).append(rid)
+    lines: list[str] = []
+    for i, (_, rids) in enumerate(sorted(groups.items())):
+        group_rows = [r for r in rows if r["run_id"] in rids]
+        if not group_rows:
+            continue
+        fig = target.with_suffix(".png") if i == 0 else target.with_name(
+            f"{target.stem}-{i + 1}.png"
+        )
+        lines += _section(group_rows, {rid: runs[rid] for rid in rids}, fig)
+    target.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return target
+
+
+def _section(
+    rows: list[dict[str, Any]], runs: dict[str, dict[str, Any]], figure: Path
+) -> list[str]:
+    """The report of the runs of one family, seed and number of tasks."""
+    counts: dict[str, int] = {}
+    for run in runs.values():
+        counts[run["method"]] = counts.get(run["method"], 0) + 1
     by_method: dict[str, list[dict[str, Any]]] = {}
-    for r in rows:
-        by_method.setdefault(r["method"], []).append(r)
+    for r in rows:  # a method run twice here (e.g. from saved maps) shows each run apart
+        label = r["method"] if counts[r["method"]] == 1 else f"{r['method']} ({r['run_id'][:8]})"
+        by_method.setdefault(label, []).append(r)
     order = [m for m in LIFELONG_METHODS if m in by_method] + sorted(
         m for m in by_method if m not in LIFELONG_METHODS
     )
@@ -231,7 +258,7 @@ def write_lifelong_report(
             mark_e = ("▲" if de.estimate < 0 else "▽") if de.excludes_zero else ""
             lines.append(f"| {name} | {_diff(ds)} {mark_s} | {_diff(de)} {mark_e} |")
     lines += ["", *_goals(summary, by_method, late), ""]
-    fig = _figure_lifelong(by_method, tasks, target.with_suffix(".png"))
+    fig = _figure_lifelong(by_method, tasks, figure)
     lines += [f"![success and excess against task index]({fig.name})", ""]
     lines += ["Runs:", ""]
     for rid, run in sorted(runs.items(), key=lambda kv: kv[1]["method"]):
@@ -240,8 +267,7 @@ def write_lifelong_report(
             f"- {run['method']}: run {rid}, family {cfg.get('family')}, seed {cfg.get('seed')}, "
             f"{cfg.get('tasks')} tasks, copi {cfg.get('code')}"
         )
-    target.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    return target
+    return lines + [""]
 
 
 def _goals(

@@ -262,6 +262,8 @@ class ResultsStore:
                     f"{self.path}: written by a newer copi (store format {version}); "
                     f"this copi reads formats up to {STORE_VERSION}: upgrade copi"
                 )
+            if not self.readonly and not tables >= _COPI_TABLES:
+                self._create()  # tables added since the file was written (e.g. lifelong)
             return True
         if not tables:
             if self.readonly:

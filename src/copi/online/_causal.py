@@ -44,6 +44,7 @@ __all__ = ["CausalMap", "CausalMapFormatError", "CausalStrategy"]
 FORMAT = "copi-causal-map"
 FORMAT_VERSION = 1
 _LENGTH = np.hypot(OFFSETS[:, 0], OFFSETS[:, 1])  # an option's length, in places
+_MAX_SIDE = 2048  # places a side at most (a map of 2048^2 x 8 options is 270 MB)
 
 
 class CausalMapFormatError(CopiError):
@@ -96,6 +97,11 @@ class CausalMap:
         self.contact_cost = float(contact_cost)
         self.patience = int(patience)
         self.context_prior = float(context_prior)
+        if 2 * self.extent / self.place > _MAX_SIDE:
+            raise InvalidArgumentError(
+                f"extent / place gives {2 * self.extent / self.place:.0f} places a side; at "
+                f"most {_MAX_SIDE}"
+            )
         self.m = int(math.ceil(2 * self.extent / self.place))
         size = self.m * self.m
         self.n = np.zeros((size, 8))
@@ -249,6 +255,7 @@ class CausalMap:
         world: str = "",
         capabilities: str = "",
         occupancy: NDArray[np.float64] | None = None,
+        hits: NDArray[np.int64] | None = None,
     ) -> Path:
         """Write the map to ``path`` (``.npz``, no pickle), atomically, with what it is of:
         ``world`` (an identity of the world it was learnt in), ``capabilities`` (the
@@ -278,6 +285,8 @@ class CausalMap:
         }
         if occupancy is not None:
             arrays["occupancy"] = np.asarray(occupancy, dtype=np.float64)
+            if hits is not None:
+                arrays["hits"] = np.asarray(hits, dtype=np.int64)
         meta = {
             "format": FORMAT,
             "version": FORMAT_VERSION,
@@ -335,7 +344,7 @@ class CausalMap:
             )
         try:
             cmap = cls(**meta["params"])
-        except (InvalidArgumentError, TypeError, KeyError) as exc:
+        except (InvalidArgumentError, TypeError, KeyError, ValueError, OverflowError) as exc:
             raise CausalMapFormatError(f"{p}: bad parameters ({exc})") from None
         _check_arrays(p, cmap, a)
         cmap.n = a["n"].astype(np.float64)
@@ -357,6 +366,12 @@ class CausalMap:
             entry[3][q] = k
         occ = a.get("occupancy")
         return cmap, None if occ is None else occ.astype(np.float64)
+
+    @staticmethod
+    def _hits(path: str | os.PathLike[str]) -> NDArray[np.int64] | None:
+        """The grid's hit counts saved beside the map (None in a file without them)."""
+        with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as z:
+            return None if "hits" not in z.files else z["hits"].astype(np.int64)
 
 
 def _check_arrays(p: Path, cmap: CausalMap, a: dict[str, NDArray[Any]]) -> None:
@@ -397,8 +412,16 @@ def _check_arrays(p: Path, cmap: CausalMap, a: dict[str, NDArray[Any]]) -> None:
             raise CausalMapFormatError(f"{p}: {name} names places or options off the map")
     if "occupancy" in a:
         occ = a["occupancy"]
-        if occ.ndim != 2 or occ.shape[0] != occ.shape[1] or not np.isfinite(occ).all():
-            raise CausalMapFormatError(f"{p}: occupancy is not a finite square grid")
+        if (
+            occ.dtype.kind != "f" or occ.ndim != 2 or occ.shape[0] != occ.shape[1]
+            or not np.isfinite(occ).all()
+        ):  # fmt: skip
+            raise CausalMapFormatError(f"{p}: occupancy is not a finite square grid of numbers")
+        hits = a.get("hits")
+        if hits is not None and (
+            hits.dtype.kind not in "iu" or hits.shape != occ.shape or (hits < 0).any()
+        ):
+            raise CausalMapFormatError(f"{p}: hits are not counts on the occupancy grid")
 
 
 class CausalStrategy:
@@ -453,12 +476,16 @@ class CausalStrategy:
         self.follows_grid = True
         self.overrides = 0
         self._occupancy: NDArray[np.float64] | None = None
+        self._hits: NDArray[np.int64] | None = None
         self.plans = 0
         self.tasks = 0
 
-    def load_occupancy(self, occupancy: NDArray[np.float64]) -> None:
-        """Start from an occupancy grid saved with the map (resuming a life)."""
+    def load_occupancy(
+        self, occupancy: NDArray[np.float64], hits: NDArray[np.int64] | None = None
+    ) -> None:
+        """Start from an occupancy grid (and its hit counts) saved with the map."""
         self._occupancy = np.asarray(occupancy, dtype=np.float64)
+        self._hits = None if hits is None else np.asarray(hits, dtype=np.int64)
 
     def reset(self, task: Any) -> None:
         """Start a task; the causal map and the grid are kept in a lifelong run."""
@@ -473,7 +500,9 @@ class CausalStrategy:
                     f"needs {self.mapping.occupancy.shape}"
                 )
             self.mapping.occupancy[...] = self._occupancy
-            self._occupancy = None
+            if self._hits is not None:
+                self.mapping.hits[...] = self._hits
+            self._occupancy = self._hits = None
         size = self.map.m * self.map.m
         self._seen = np.zeros(self.mapping.n * self.mapping.n, dtype=np.int64)
         self._queue = np.empty(4 * self.k * self.k, dtype=np.int64)
@@ -626,7 +655,8 @@ class CausalStrategy:
     ) -> Path:
         """Save the causal map and the occupancy grid (see :meth:`CausalMap.save`)."""
         return self.map.save(path, world=world, capabilities=capabilities,
-                             occupancy=self.mapping.occupancy)  # fmt: skip
+                             occupancy=self.mapping.occupancy,
+                             hits=self.mapping.hits)  # fmt: skip
 
     @classmethod
     def load(
@@ -639,12 +669,15 @@ class CausalStrategy:
     ) -> CausalStrategy:
         """A strategy resuming the life saved in ``path`` (see :meth:`CausalMap.load`)."""
         cmap, occ = CausalMap.load(path, world=world, capabilities=capabilities)
-        strategy = cls(cmap, **kwargs)
+        try:
+            strategy = cls(cmap, **kwargs)
+        except InvalidArgumentError as exc:
+            raise CausalMapFormatError(f"{path}: {exc}") from None
         if occ is not None:
             n = int(math.ceil(2 * strategy.mapping.extent / strategy.mapping.cell))
             if occ.shape != (n, n):
                 raise CausalMapFormatError(
                     f"{path}: occupancy grid of shape {occ.shape}, expected {(n, n)}"
                 )
-            strategy.load_occupancy(occ)
+            strategy.load_occupancy(occ, CausalMap._hits(path))
         return strategy

@@ -86,6 +86,10 @@ class LearntAgent:
         self.capabilities = capabilities
         self.name = name
         self.guard = float(guard)
+        for key, v in (("alpha", alpha), ("beta", beta)):
+            # a direction's alignment bounds its score only for weights >= 0
+            if not (isinstance(v, int | float) and math.isfinite(v) and v >= 0):
+                raise InvalidArgumentError(f"{key} must be a finite number >= 0; got {v!r}")
         self.alpha = float(alpha)
         self.beta = float(beta)
         self.wait = bool(wait)
@@ -181,7 +185,8 @@ class LearntAgent:
         """Velocities for many agents at once: row i is the decision :meth:`act` makes
         for reading ``ranges[i]`` after ``previous[i]``, with the global direction
         ``desired[i]`` (no global strategy here: it is given), within ``reach[i]`` (inf
-        by default), with ``static[i]`` as the static reading (none by default). The
+        by default), with ``static[i]`` as the static reading (none by default), and
+        without persistence (a batch has no previous decision). The
         nearest-node search is screened by one float32 matrix product. Returns
         (actions (b, 2), nodes (b,))."""
         n = self.capabilities.n_rays
@@ -213,9 +218,10 @@ class LearntAgent:
             raise InvalidArgumentError(
                 f"static readings must have shape {s.shape}; got {st.shape}"
             )
-        if getattr(self, "_nodes32", np.empty((0, 0))).shape != self._nodes.shape:
+        if getattr(self, "_nodes32_of", None) is not self._nodes:
             self._nodes32 = self._nodes.astype(np.float32)
             self._norms32 = (self._nodes32 * self._nodes32).sum(1)
+            self._nodes32_of = self._nodes
         s32 = np.nan_to_num(s, nan=0.0, posinf=0.0, neginf=0.0).astype(np.float32)
         screen = self._norms32[None, :] - 2.0 * (s32 @ self._nodes32.T)
         screen += (s32 * s32).sum(1)[:, None]
@@ -237,10 +243,11 @@ class LearntAgent:
             self._growth = ContextController(self.capabilities, continual=True,
                                              grow_every=self.grow_every)  # fmt: skip
         nodes, _, _ = self._growth._learn_unfamiliar(s)
-        if len(nodes) == len(self._nodes):
-            return
-        g = self._growth
         base = len(self.capabilities.nodes)
+        if len(nodes) == base:  # the second map starts once two readings have come
+            return
+        # Every update moves the grown nodes (and may change their landmark): refresh.
+        g = self._growth
         self._nodes = np.ascontiguousarray(nodes)
         self._templates = np.concatenate(
             [np.asarray(self.capabilities.node_template, dtype=np.int64), g._extra_template]

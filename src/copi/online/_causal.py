@@ -586,7 +586,7 @@ class CausalStrategy:
             self.goal_place = goal
             self._plan(here, goal)
         if self.option is None and here != goal:
-            self._start_option(here, int(context), pos)
+            self._start_option(here, int(context))
         dist = math.hypot(g[0], g[1])
         if here == goal or self.value[here] >= 1e9 or self.follows_grid:
             return fine
@@ -609,7 +609,7 @@ class CausalStrategy:
         v = aim - pos
         return v, math.hypot(v[0], v[1])
 
-    def _grid_option(self, here: int, pos: NDArray[np.float64]) -> int:
+    def _grid_option(self, here: int) -> int:
         """The option the grid's plan takes from place ``here`` (-1: none, or it leaves
         the place for one that is not a neighbour)."""
         path = self.mapping.path
@@ -625,12 +625,12 @@ class CausalStrategy:
                 return -1
         return -1
 
-    def _start_option(self, here: int, context: int, pos: NDArray[np.float64]) -> None:
+    def _start_option(self, here: int, context: int) -> None:
         """Choose the option at state (here, context): the grid's own way unless what
         was learnt here says another option is better by more than ``slack`` steps
         (then the causal map's choice is followed for the option's duration)."""
         best = self._choose(here, context)
-        grid = self._grid_option(here, pos)
+        grid = self._grid_option(here)
         self.follows_grid = False
         if grid >= 0:
             q_grid = self.map.option_value(here, grid, self.value, bool(self._plaus[here, grid]),

@@ -305,9 +305,7 @@ class ContextController:
         s = np.ascontiguousarray(s)
         # Screen the nearest-node search with one float32 matrix product (BLAS); the
         # kernel then measures the few close nodes exactly.
-        s32 = s.astype(np.float32)
-        screen = self._norms32[None, :] - 2.0 * (s32 @ self._nodes32.T)
-        screen += (s32 * s32).sum(1)[:, None]
+        screen = screen_distances(s, self._nodes32, self._norms32)
         _kernels.decide_batch(
             s, np.ascontiguousarray(st), self._nodes, screen, self._cand, self._ok, want, r,
             self.guard, self._cos, self._sin, self.max_range, out,
@@ -367,6 +365,18 @@ class ContextController:
     def unfamiliar_rate(self) -> float:
         """Share of decisions so far whose reading was unfamiliar."""
         return self.n_unfamiliar / self.n_decisions if self.n_decisions else 0.0
+
+
+def screen_distances(
+    s: NDArray[np.float64], nodes32: NDArray[np.float32], norms32: NDArray[np.float32]
+) -> NDArray[np.float32]:
+    """Approximate squared distances of readings ``s`` (b, n) to the nodes, by one
+    float32 matrix product (BLAS): the screen of the batched nearest-node searches.
+    Non-finite readings read as 0 here (the kernels refuse them)."""
+    s32 = np.nan_to_num(s, nan=0.0, posinf=0.0, neginf=0.0).astype(np.float32)
+    screen = norms32[None, :] - 2.0 * (s32 @ nodes32.T)
+    screen += (s32 * s32).sum(1)[:, None]
+    return np.ascontiguousarray(screen)
 
 
 def _floats(x: Any, name: str) -> NDArray[np.float64]:

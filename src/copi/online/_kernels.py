@@ -240,6 +240,27 @@ def _choose(  # type: ignore[no-untyped-def]
     out[4] = -3.0 - best if compass else best
 
 
+@njit(cache=True, inline="always", fastmath=FAST)
+def _screened_nearest(x, row, nodes):  # type: ignore[no-untyped-def]
+    """:func:`_nearest` with the search screened by ``row`` (approximate squared
+    distances): every node within a wide margin of the screened minimum is measured
+    with :func:`_exact`, so the choice is the one :func:`_nearest` makes."""
+    m = np.inf
+    for i in range(row.shape[0]):
+        if row[i] < m:
+            m = row[i]
+    cut = m + 1e-3 * abs(m) + 1e-2
+    node = -1
+    bd = np.inf
+    for i in range(row.shape[0]):
+        if row[i] <= cut:
+            e = _exact(x, nodes, i)
+            if e < bd:
+                bd = e
+                node = i
+    return node, bd
+
+
 @njit(cache=True, fastmath=FAST)
 def decide_batch(  # type: ignore[no-untyped-def]
     s, static, nodes, screen, cand, ok, want, reach, guard, cos, sin, max_range, out
@@ -257,20 +278,7 @@ def decide_batch(  # type: ignore[no-untyped-def]
         if not finite:
             out[b, 2] = -1.0
             continue
-        row = screen[b]
-        m = np.inf
-        for i in range(row.shape[0]):
-            if row[i] < m:
-                m = row[i]
-        cut = m + 1e-3 * abs(m) + 1e-2
-        node = -1
-        bd = np.inf
-        for i in range(row.shape[0]):
-            if row[i] <= cut:
-                e = _exact(x, nodes, i)
-                if e < bd:
-                    bd = e
-                    node = i
+        node, bd = _screened_nearest(x, screen[b], nodes)
         _choose(
             x, static[b], node, bd, cand, ok, want[b, 0], want[b, 1], reach[b], guard,
             cos, sin, max_range, out[b],
@@ -340,20 +348,7 @@ def decide_learnt_batch(  # type: ignore[no-untyped-def]
         x = s[b]
         if not _learnt_inputs(x, prev[b], static[b], out[b]):
             continue
-        row = screen[b]
-        m = np.inf
-        for i in range(row.shape[0]):
-            if row[i] < m:
-                m = row[i]
-        cut = m + 1e-3 * abs(m) + 1e-2
-        node = -1
-        bd = np.inf
-        for i in range(row.shape[0]):
-            if row[i] <= cut:
-                e = _exact(x, nodes, i)
-                if e < bd:
-                    bd = e
-                    node = i
+        node, bd = _screened_nearest(x, screen[b], nodes)
         _learnt_choose(
             x, prev[b], static[b], node, bd, node_prior, net, want[b, 0], want[b, 1],
             reach[b], guard, alpha, beta, wait, cos, sin, max_range, feat, p, out[b], True,

@@ -13,7 +13,7 @@ from copi.learning import Capabilities
 from copi.learning._safety import SafetyModel, template_directions
 from copi.online import _kernels
 from copi.online._agent import Observation, Steering, Task
-from copi.online._controller import ContextController
+from copi.online._controller import ContextController, screen_distances
 
 __all__ = ["LearntAgent", "node_priors"]
 
@@ -218,16 +218,11 @@ class LearntAgent:
             raise InvalidArgumentError(
                 f"static readings must have shape {s.shape}; got {st.shape}"
             )
-        if getattr(self, "_nodes32_of", None) is not self._nodes:
-            self._nodes32 = self._nodes.astype(np.float32)
-            self._norms32 = (self._nodes32 * self._nodes32).sum(1)
-            self._nodes32_of = self._nodes
-        s32 = np.nan_to_num(s, nan=0.0, posinf=0.0, neginf=0.0).astype(np.float32)
-        screen = self._norms32[None, :] - 2.0 * (s32 @ self._nodes32.T)
-        screen += (s32 * s32).sum(1)[:, None]
+        nodes32 = self._nodes.astype(np.float32)  # the nodes may have grown
+        screen = screen_distances(s, nodes32, (nodes32 * nodes32).sum(1))
         out = np.empty((b, 5))
         _kernels.decide_learnt_batch(
-            s, prev, st, self._nodes, np.ascontiguousarray(screen), self._prior, self._net,
+            s, prev, st, self._nodes, screen, self._prior, self._net,
             want, np.ascontiguousarray(r), self.guard, self.alpha, self.beta, self.wait,
             self._cos, self._sin, self.max_range, self._feat, self._p, out,
         )  # fmt: skip

@@ -149,12 +149,9 @@ class Mapping:
         occ[cells[:, 1], cells[:, 0]] = np.minimum(occ[cells[:, 1], cells[:, 0]] + _HIT, _CEIL)
         self.hits[cells[:, 1], cells[:, 0]] += 1
 
-    def walls(self) -> NDArray[np.bool_]:
-        """The cells the agent has learnt to be walls (see the class)."""
-        return (self.occupancy >= self.wall_level) & (self.hits >= self.wall_hits)
-
     def static_reading(self, position: Any) -> NDArray[np.float64]:
-        """The ring's reading at ``position`` (the grid's frame) of the learnt walls alone:
+        """The ring's reading at ``position`` (the grid's frame) of the learnt walls alone
+        (cells with occupancy >= ``wall_level``, hit ``wall_hits`` times):
         never farther than the wall's face, the maximum range where no wall is known."""
         p = np.asarray(position, dtype=np.float64)
         cast_grid(self.occupancy, self.hits, self.wall_level, self.wall_hits, p[0], p[1],

@@ -47,6 +47,9 @@ GRID: dict[str, list[dict[str, float]]] = {
         {"margin": 0.9, "follow": 1.8},
     ],
     "replan": [{"inflate": v} for v in (0.3, 0.6, 1.0, 1.5)],
+    # the weight of the template safety priors in the learnt preset's ablations
+    "copi-learnt+priors": [{"beta": v} for v in (0.25, 0.5, 1.0, 2.0)],
+    "copi-learnt+motion": [{"beta": v} for v in (0.25, 0.5, 1.0, 2.0)],
     "navground-hrvo": [{"safety_margin": v} for v in (0.1, 0.3, 0.6, 1.0)],
     "navground-hl": [{"safety_margin": v} for v in (0.1, 0.3, 0.6, 1.0)],
 }
@@ -81,8 +84,15 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--caps-dir", default="results/tuning")
     ap.add_argument("--out", default="docs/tuning.md")
+    ap.add_argument("--methods", default=None, help="comma-separated subset of the grid")
     a = ap.parse_args()
-    CAPS.update(ensure_capabilities(a.caps_dir, {"extended"}))
+    if a.methods:
+        keep = a.methods.split(",")
+        for m in list(GRID):
+            if m not in keep:
+                del GRID[m]
+    presets = {p for m in GRID if (p := method_spec(m).capabilities) is not None}
+    CAPS.update(ensure_capabilities(a.caps_dir, presets))
     items = [(f, k) for f in a.families.split(",") for k in range(a.episodes)]
     rows: list[tuple[str, int, str, float]] = []
     with ProcessPoolExecutor(a.workers) as pool:

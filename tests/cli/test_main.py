@@ -187,7 +187,7 @@ def test_evaluate_report_and_bad_inputs(tmp_path: Path, capsys: pytest.CaptureFi
     assert code == 2 and "not a complete .npz archive" in err
     assert not (tmp_path / "b.sqlite").exists()
     for bad, message in [
-        (["--method", "astar"], "method must be one of copi-faithful, copi-extended, copi-learnt, straight"),
+        (["--method", "astar"], "method must be one of copi-faithful, copi-extended, copi-learnt, copi-learnt+priors"),
         (
             ["--sensing", "psychic"],
             "sensing level must be one of sensor, map, oracle; got 'psychic'",

@@ -131,7 +131,7 @@ def test_bad_files_are_refused(caps: Capabilities, tmp_path: Path) -> None:
         meta["params"]["n_rays"] = 16
         a["metadata"] = np.array(json.dumps(meta))
 
-    with pytest.raises(CapabilitiesFormatError, match="readings have 32 rays but its sensor 16"):
+    with pytest.raises(CapabilitiesFormatError, match="contexts have 32 components but 1 x its sensor.s 16 rays"):
         Capabilities.load(doctored("sensor.npz", other_sensor))
 
     def bad_index(a):

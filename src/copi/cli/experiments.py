@@ -299,6 +299,10 @@ def pursuit_command(
     if preset is not None:
         from copi.experiments.methods import preset as get_preset
 
+        if preset == "learnt-motion":
+            raise InvalidArgumentError(
+                "the pursuit game plays presets faithful, extended and learnt; got learnt-motion"
+            )
         want = get_preset(preset).guard
         check_preset_capabilities(preset, Capabilities.load(capabilities), str(capabilities))
         if guard is not None and guard != want:

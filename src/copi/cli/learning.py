@@ -45,9 +45,15 @@ def learn_command(
     preset: Annotated[
         str | None,
         typer.Option(
-            "--preset", help="Learn for a mode: faithful (4 directions), extended (16), learnt."
+            "--preset",
+            help="Learn for a mode: faithful (4 directions), extended (16), learnt, "
+            "learnt-motion.",
         ),
     ] = None,
+    motion: Annotated[
+        bool,
+        typer.Option("--motion", help="Contexts that see motion: [reading, its change]."),
+    ] = False,
 ) -> None:
     """Learn capabilities offline, without any task (paper §II): explore, grow the
     context map, skeletonise it into landmarks, reduce them by symmetry, learn local
@@ -64,6 +70,11 @@ def learn_command(
             )
         directions = want
     safety = preset is not None and get_preset(preset).learn.safety
+    if preset is not None:
+        want_motion = get_preset(preset).learn.motion
+        if motion and not want_motion:
+            raise InvalidArgumentError(f"--motion contradicts --preset {preset} (no motion)")
+        motion = want_motion
     params = LearnParams(
         worlds=worlds,
         steps=steps,
@@ -76,6 +87,7 @@ def learn_command(
         learner=learner,
         family=family,
         safety=safety,
+        motion=motion,
     )
     output.parent.mkdir(parents=True, exist_ok=True)
     with progress() as bar:
@@ -94,8 +106,9 @@ def learn_command(
 
 def _summary_line(s: dict[str, object]) -> str:
     return (
-        f"{s['nodes']} nodes -> {s['landmarks']} landmarks -> {s['reduced_landmarks']} reduced "
-        f"landmarks -> {s['policies']} policies ({s['directions']} directions, {s['learner']})"
+        f"{s['nodes']} nodes ({s['contexts']}) -> {s['landmarks']} landmarks -> "
+        f"{s['reduced_landmarks']} reduced landmarks -> {s['policies']} policies "
+        f"({s['directions']} directions, {s['learner']})"
     )
 
 

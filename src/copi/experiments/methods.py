@@ -23,6 +23,7 @@ from copi.learning import Capabilities, LearnParams
 from copi.online import SENSING_LEVELS, Agent, CopiAgent, LearntAgent, check_sensing
 
 __all__ = [
+    "ABLATIONS",
     "CAPABILITY_PRESETS",
     "PRESETS",
     "Preset",
@@ -63,6 +64,10 @@ PRESETS: dict[str, Preset] = {
                "every compass direction scored by the route and by learnt safety (a network "
                "over the reading turned to the direction, trained on counterfactual probes "
                "of a task-free exploration); compass-guard's hand-written guard as a filter"),
+        Preset("learnt-motion", LearnParams(directions=16, safety=True, motion=True),
+               "copi-learnt+motion", 1.05,
+               "the learnt preset with contexts that see motion (the reading and its change) "
+               "and the per-template safety priors over them added to each move's score"),
     ]
 }  # fmt: skip
 """copi's modes; the README says what each knows and what in it is learnt."""
@@ -91,6 +96,12 @@ def check_preset_capabilities(name: str, caps: Capabilities, where: str = "the f
             f"{where} has no safety priors; preset {name} needs them: learn it with "
             f"copi learn --preset {name}"
         )
+    if caps.motion != want.motion:
+        which = "with" if caps.motion else "without"
+        raise InvalidArgumentError(
+            f"{where} was learnt {which} contexts that see motion; preset {name} needs "
+            f"{'them' if want.motion else 'none'}: learn it with copi learn --preset {name}"
+        )
     have = int(caps.policies.passable.shape[1])
     if have != want.directions:
         raise InvalidArgumentError(
@@ -116,6 +127,8 @@ class MethodSpec:
     """The capability preset it needs (copi's modes), else None."""
     optional: bool = False
     """Needs an optional extra (navground)."""
+    ablation: bool = False
+    """An ablation of a copi mode: run when asked (``--methods ablations``), not by default."""
 
     @property
     def available(self) -> bool:
@@ -128,6 +141,12 @@ _MAP_AND_SENSOR = ("sensor", "map")
 # all five families, 40 episodes each, four settings per method; the table is
 # docs/tuning.md). navground's ORCA was not tuned.
 _NAVGROUND_MARGIN = {"navground-hrvo": 0.6, "navground-hl": 0.3}
+_LEARNT: dict[str, Any] = {"guard": 1.05, "alpha": 2.0, "beta": 0.0, "wait": False}
+_BETA = 0.5
+"""Weight of the template priors in the ablations that use them (validation seed 1)."""
+_PERSIST = 0.05
+"""Persistence bonus of copi-learnt+persist (the smaller of the two validated, see the
+README: the larger cost up to 5 points of success)."""
 
 METHODS: dict[str, MethodSpec] = {
     spec.name: spec
@@ -150,7 +169,28 @@ METHODS: dict[str, MethodSpec] = {
             "reading turned to each move, trained on counterfactual probes of a task-free "
             "exploration, shared by every direction through the symmetry); compass-guard's "
             "hand-written guard kept as a filter",
-            {"guard": 1.05, "alpha": 2.0, "beta": 0.0, "wait": False}, capabilities="learnt",
+            _LEARNT, capabilities="learnt",
+        ),
+        # The learnt preset's ablations (issue: "each one an option, each one ablated"):
+        # each differs from copi-learnt in one thing; compass-guard is copi-learnt with
+        # nothing learnt (alpha = beta = 0).
+        MethodSpec(
+            "copi-learnt+priors", "sensor", _MAP_AND_SENSOR,
+            "copi-learnt plus the per-template safety priors (contexts of the reading "
+            "alone, each move read through the template's symmetry) in each move's score",
+            {**_LEARNT, "beta": _BETA}, capabilities="learnt", ablation=True,
+        ),
+        MethodSpec(
+            "copi-learnt+motion", "sensor", _MAP_AND_SENSOR,
+            "copi-learnt+priors with contexts that see motion: context map, landmarks, "
+            "templates and their priors over [reading, its change]",
+            {**_LEARNT, "beta": _BETA}, capabilities="learnt-motion", ablation=True,
+        ),
+        MethodSpec(
+            "copi-learnt+persist", "sensor", _MAP_AND_SENSOR,
+            "copi-learnt whose last move scores more while the reading stays within its "
+            "landmark (policies that last, paper §V)",
+            {**_LEARNT, "persist": _PERSIST}, capabilities="learnt", ablation=True,
         ),
         MethodSpec(
             "straight", "sensor", _MAP_AND_SENSOR,
@@ -196,8 +236,15 @@ METHODS: dict[str, MethodSpec] = {
 }  # fmt: skip
 """The registry: copi's modes first, then the baselines and peers."""
 
-DEFAULT_METHODS = tuple(n for n in METHODS if n != "navground-orca")
-"""Methods the benchmark runs unless told otherwise (navground's ORCA is optional)."""
+DEFAULT_METHODS = tuple(
+    n for n, s in METHODS.items() if n != "navground-orca" and not s.ablation
+)
+"""Methods the benchmark runs unless told otherwise (navground's ORCA is optional; the
+ablations run when asked)."""
+
+ABLATIONS = ("copi-learnt", *(n for n, s in METHODS.items() if s.ablation), "compass-guard")
+"""What ``--methods ablations`` stands for: copi-learnt, each of its ablations, and
+compass-guard (copi-learnt with nothing learnt)."""
 
 
 def method_spec(name: str) -> MethodSpec:
@@ -213,8 +260,10 @@ def method_spec(name: str) -> MethodSpec:
 def parse_methods(text: str | None) -> list[tuple[str, str]]:
     """``"dwa,copi-extended@map"`` -> [(method, level), ...]: a bare name stands for
     every level the method runs at by default; ``name@level`` for one level (checked
-    against what the method needs). None: every default method at its levels."""
+    against what the method needs); ``ablations`` for :data:`ABLATIONS`. None: every
+    default method at its levels."""
     items = DEFAULT_METHODS if text is None else [t.strip() for t in text.split(",") if t.strip()]
+    items = [m for item in items for m in (ABLATIONS if item == "ablations" else (item,))]
     if not items:
         raise InvalidArgumentError("methods must name at least one method; got none")
     out: list[tuple[str, str]] = []
@@ -238,7 +287,7 @@ def make_agent(name: str, capabilities: Capabilities | None = None, **params: An
     if spec.capabilities is not None:
         if capabilities is None:
             raise InvalidArgumentError(f"{name} needs a capabilities file")
-        if spec.capabilities == "learnt":
+        if CAPABILITY_PRESETS[spec.capabilities].safety:  # the learnt presets
             return LearntAgent(capabilities, name=name, guard=float(p["guard"]),
                                alpha=float(p["alpha"]), beta=float(p["beta"]),
                                wait=bool(p["wait"]),

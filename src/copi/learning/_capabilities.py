@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 
 from copi._files import write_npz
 from copi.errors import CapabilitiesFormatError
+from copi.learning._contexts import context_blocks, motion_contexts
 from copi.learning._policies import ActionPriors, PolicySet
 from copi.learning._safety import SafetyModel
 from copi.learning._skeleton import Landmarks
@@ -68,7 +69,8 @@ class Capabilities:
     """
 
     nodes: NDArray[np.float64]
-    """The context map's nodes (GNG), shape (n_nodes, n_rays)."""
+    """The context map's nodes (GNG), shape (n_nodes, n_rays) — or (n_nodes, 2 n_rays)
+    for contexts that see motion (the reading, then its change; :attr:`motion`)."""
     edges: NDArray[np.int64]
     """The context map's edges, shape (n_edges, 2)."""
     landmarks: Landmarks
@@ -86,8 +88,22 @@ class Capabilities:
     # -- shortcuts used online --------------------------------------------------------
 
     @property
+    def motion(self) -> bool:
+        """Whether a context is [reading, its change] (learnt with ``motion=True``)."""
+        return bool(self.params.get("motion", False))
+
+    @property
     def n_rays(self) -> int:
-        return int(self.nodes.shape[1])
+        """Rays of the sensor the contexts were learnt for."""
+        return int(self.nodes.shape[1]) // context_blocks(self.motion)
+
+    def contexts(self, readings: Any, previous: Any = None) -> NDArray[np.float64]:
+        """The contexts of readings (..., n_rays) after ``previous`` (same shape; the
+        readings themselves when None: no change seen), as the map's nodes hold them."""
+        s = np.asarray(readings, dtype=np.float64)
+        if not self.motion:
+            return s
+        return motion_contexts(s, s if previous is None else previous)
 
     @property
     def node_template(self) -> NDArray[np.int64]:
@@ -102,6 +118,7 @@ class Capabilities:
     def summary(self) -> dict[str, Any]:
         """Counts of each stage's output (JSON-able)."""
         return {
+            "contexts": "reading+change" if self.motion else "reading",
             "nodes": int(self.nodes.shape[0]),
             "edges": int(self.edges.shape[0]),
             "landmarks": self.landmarks.n_landmarks,
@@ -329,9 +346,18 @@ def _check_consistent(p: Path, c: Capabilities) -> None:
     T = len(c.reduction.templates)
     D = len(c.policies.names)
     problems = []
-    rays = c.params.get("n_rays", dim)
-    if rays != dim:
-        problems.append(f"the map's readings have {dim} rays but its sensor {rays}")
+    motion = c.params.get("motion", False)
+    if not isinstance(motion, bool):
+        problems.append(f"motion must be true or false; got {motion!r}")
+        motion = False
+    blocks = context_blocks(motion)
+    rays = c.params.get("n_rays", dim // blocks)
+    if rays * blocks != dim:
+        what = "readings and changes" if motion else "readings"
+        problems.append(
+            f"the map's contexts have {dim} components but {blocks} x its sensor's {rays} "
+            f"rays ({what}) were expected"
+        )
     if c.edges.size and (c.edges.min() < 0 or c.edges.max() >= n):
         problems.append("edges refer to missing nodes")
     # Nodes and landmarks are readings (ranges within the sensor's reach): a value far
@@ -480,7 +506,7 @@ def _more_problems(c: Capabilities) -> list[str]:
     lm, g, red, pol = c.landmarks, c.group, c.reduction, c.policies
     L, T, D = lm.n_landmarks, len(red.templates), len(pol.names)
     problems = []
-    if (c.nodes < 0).any():
+    if (c.nodes[:, : c.n_rays] < 0).any():
         problems.append("map nodes hold negative ranges")
     if lm.anchors.shape != (L,) or not _in_range(lm.anchors, n):
         problems.append(f"landmark anchors must be {L} nodes in 0..{n - 1}")
@@ -526,8 +552,9 @@ def _more_problems(c: Capabilities) -> list[str]:
         problems.append(f"action priors must have shape ({T}, {D})")
     if c.safety is not None:
         net = c.safety.net
-        if net.ndim != 3 or net.shape[0] != 2 or net.shape[2] != 1 + 4 * dim or net.shape[1] < 2:
-            problems.append(f"the safety networks must have shape (2, h + 1, {1 + 4 * dim})")
+        f = 1 + 4 * c.n_rays
+        if net.ndim != 3 or net.shape[0] != 2 or net.shape[2] != f or net.shape[1] < 2:
+            problems.append(f"the safety networks must have shape (2, h + 1, {f})")
         if c.safety.template_safe.shape != (T, D) or c.safety.template_counts.shape != (T, D):
             problems.append(f"safety priors must have shape ({T}, {D})")
         if not (np.isfinite(net).all() and np.isfinite(c.safety.template_safe).all()):

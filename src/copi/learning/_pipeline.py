@@ -14,6 +14,12 @@ import numpy as np
 from copi.errors import InvalidArgumentError
 from copi.geometry._arrays import positive_int
 from copi.learning._capabilities import Capabilities
+from copi.learning._contexts import (
+    block_operators,
+    context_blocks,
+    motion_contexts,
+    previous_in_world,
+)
 from copi.learning._explore import explore
 from copi.learning._gng import GrowingNeuralGas
 from copi.learning._policies import ActionPriors, AStarLearner, ValueIterationLearner, compass
@@ -75,6 +81,11 @@ class LearnParams:
     """Steps each probed action is held while the obstacles move."""
     probe_families: str = "star,crowd,polygon,indoor"
     """Comma-separated world families of the probing walks (task-independent: no goal)."""
+    motion: bool = False
+    """Contexts that see motion: the context map, landmarks, templates and priors live
+    on [reading, its change since the last step] (see :mod:`copi.learning._contexts`),
+    the symmetry acting on both blocks alike. The local policies are still learnt on a
+    template's reading block (its static local world)."""
 
     def __post_init__(self) -> None:
         for name in ("worlds", "steps", "workers", "n_rays", "epochs", "probe_worlds",
@@ -126,6 +137,12 @@ def learn(params: LearnParams | None = None, *, progress: Progress | None = None
         {"stage": "explore", "samples": ex.n_samples, "seconds": time.perf_counter() - t0}
     )
 
+    # The contexts: the readings, or the readings with their change (in world order).
+    contexts = (
+        motion_contexts(ex.readings, previous_in_world(ex.readings, ex.world))
+        if p.motion
+        else ex.readings
+    )
     if ex.n_samples < 2:
         raise InvalidArgumentError(
             f"exploration gave {ex.n_samples} reading(s); the context map needs at least 2: "
@@ -133,8 +150,8 @@ def learn(params: LearnParams | None = None, *, progress: Progress | None = None
         )
     t0 = time.perf_counter()
     report("context map", 0, 1)
-    gng = GrowingNeuralGas(p.max_nodes, epochs=p.epochs, random_state=p.seed).fit(ex.readings)
-    to_nodes = gng.transform(ex.readings)
+    gng = GrowingNeuralGas(p.max_nodes, epochs=p.epochs, random_state=p.seed).fit(contexts)
+    to_nodes = gng.transform(contexts)
     nearest = to_nodes.argmin(1)
     dist = to_nodes[np.arange(len(nearest)), nearest]
     del to_nodes
@@ -167,14 +184,16 @@ def learn(params: LearnParams | None = None, *, progress: Progress | None = None
     )
 
     t0 = time.perf_counter()
-    group = SymmetryGroup.generate(ring_operators(p.n_rays))
+    group = SymmetryGroup.generate(
+        block_operators(ring_operators(p.n_rays), context_blocks(p.motion))
+    )
     _check_directions(group, p.directions)
     # The paper accepts chi_1 ~ g . chi_2 "or an approximation thereof, as the values may
     # be continuous" (§II-C). Its resolution here is the map's own: a training reading's
     # ray lies within this distance of the same ray of the node that represents it in
     # symmetry_quantile % of cases, so two landmarks agreeing that closely on every ray
     # differ by no more than the map already ignores within one node.
-    per_ray = np.abs(ex.readings - gng.nodes_[nearest])
+    per_ray = np.abs(contexts - gng.nodes_[nearest])
     tol = (
         p.symmetry_tol
         if p.symmetry_tol is not None
@@ -200,9 +219,9 @@ def learn(params: LearnParams | None = None, *, progress: Progress | None = None
         if p.learner == "astar"
         else ValueIterationLearner(agent_radius=p.agent_radius)
     )
-    templates = lm.points[red.templates]
+    templates = lm.points[red.templates][:, : p.n_rays]  # the reading block
     policies = learner.learn(templates, p.max_range, p.directions)
-    priors = _priors(gng, lm, red, group, ex, p.directions)
+    priors = _priors(gng, lm, red, group, ex, contexts, p.directions)
     report("policies", 1, 1)
     stages.append(
         {
@@ -221,7 +240,10 @@ def learn(params: LearnParams | None = None, *, progress: Progress | None = None
             agent_radius=p.agent_radius, sensor=sensor,
             progress=lambda k, n: report("safety probes", k, n),
         )  # fmt: skip
-        landmark = lm.node_landmark[gng.predict(probes.readings)]
+        probed = (
+            motion_contexts(probes.readings, probes.previous) if p.motion else probes.readings
+        )
+        landmark = lm.node_landmark[gng.predict(probed)]
         safety, safety_stats = learn_safety(
             probes, p.directions, red.template_of[landmark],
             group.matrices[red.element[landmark]], len(red.templates), seed=p.seed,
@@ -259,11 +281,11 @@ def _check_directions(group: SymmetryGroup, n: int) -> None:
             )
 
 
-def _priors(gng, lm, red, group, ex, n_directions) -> ActionPriors:  # type: ignore[no-untyped-def]
+def _priors(gng, lm, red, group, ex, contexts, n_directions) -> ActionPriors:  # type: ignore[no-untyped-def]
     """Action priors from the exploration: the context before each move, mapped to its
     template, and the move turned into the template's frame."""
     same_world = ex.world[1:] == ex.world[:-1]
-    before = ex.readings[:-1][same_world]
+    before = contexts[:-1][same_world]
     moves = ex.moves[1:][same_world]
     landmark = lm.node_landmark[gng.predict(before)]
     template = red.template_of[landmark]

@@ -84,6 +84,11 @@ class ContextController:
         candidate passes, the agent escapes along the compass direction the reading
         leaves most room in. Typically the agent radius plus an obstacle's step plus a
         margin.
+    chain : bool
+        Whether it will decide (the default). Contexts that see motion
+        (``capabilities.motion``) are refused then: the chain recognises a reading alone.
+        ``chain=False`` keeps only the context growth (the learnt preset's, which
+        recognises contexts with their motion).
     """
 
     def __init__(
@@ -94,8 +99,16 @@ class ContextController:
         continual: bool = False,
         guard: float = 0.0,
         grow_every: int = 20,
+        chain: bool = True,
     ) -> None:
         caps = capabilities
+        self.chain = bool(chain)
+        if self.chain and caps.motion:
+            raise InvalidArgumentError(
+                "these capabilities hold contexts that see motion (learnt with motion=True); "
+                "the chain of the faithful and extended presets recognises a reading alone: "
+                "use them with the learnt preset, or learn without motion"
+            )
         self.capabilities = caps
         self.n_rays = caps.n_rays
         self.names = list(caps.policies.names)
@@ -207,6 +220,7 @@ class ContextController:
         explain : bool
             Also return a :class:`Decision` saying how the action came about.
         """
+        self._check_chain()
         s = _floats(ranges, "ranges")
         if s.shape != (self.n_rays,):
             raise InvalidArgumentError(
@@ -272,6 +286,7 @@ class ContextController:
     ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
         """Velocities for many agents at once (same results as :meth:`decide` row by
         row); returns (actions (b, 2), nodes (b,))."""
+        self._check_chain()
         s = self._check(ranges)
         if s.ndim != 2:
             raise InvalidArgumentError(
@@ -315,6 +330,11 @@ class ContextController:
         self.n_decisions += len(s)
         self.n_unfamiliar += int((np.sqrt(out[:, 3]) > self.threshold).sum())
         return out[:, :2].copy(), out[:, 2].astype(np.int64)
+
+    def _check_chain(self) -> None:
+        if not self.chain:
+            raise InvalidArgumentError("this controller was made with chain=False: it grows "
+                                       "contexts but does not decide")  # fmt: skip
 
     # -- continual learning ----------------------------------------------------------
 

@@ -13,6 +13,7 @@ import math
 import numpy as np
 from numba import njit
 
+from copi.learning._contexts import MOTION_CLIP
 from copi.learning._gng_kernels import FAST
 from copi.learning._safety import ring_features, safety_of, safety_probabilities
 
@@ -34,6 +35,42 @@ def _nearest(x, nodes):  # type: ignore[no-untyped-def]
     bd = np.inf
     for i in range(nodes.shape[0]):
         e = _exact(x, nodes, i)
+        if e < bd:
+            bd = e
+            best = i
+    return best, bd
+
+
+@njit(cache=True, inline="always", fastmath=FAST)
+def _exact_motion(s, prev, nodes, i):  # type: ignore[no-untyped-def]
+    """Squared distance from the context [s, clip(s - prev)] (contexts that see motion,
+    :mod:`copi.learning._contexts`) to node i, without building the context."""
+    n = s.shape[0]
+    e = 0.0
+    for j in range(n):
+        diff = s[j] - nodes[i, j]
+        e += diff * diff
+    for j in range(n):
+        c = s[j] - prev[j]
+        if c > MOTION_CLIP:
+            c = MOTION_CLIP
+        elif c < -MOTION_CLIP:
+            c = -MOTION_CLIP
+        diff = c - nodes[i, n + j]
+        e += diff * diff
+    return e
+
+
+@njit(cache=True, inline="always", fastmath=FAST)
+def _nearest_context(s, prev, nodes):  # type: ignore[no-untyped-def]
+    """:func:`_nearest` of reading ``s``'s context: the reading itself, or with nodes of
+    twice its length, [s, clip(s - prev)]."""
+    if nodes.shape[1] == s.shape[0]:
+        return _nearest(s, nodes)
+    best = -1
+    bd = np.inf
+    for i in range(nodes.shape[0]):
+        e = _exact_motion(s, prev, nodes, i)
         if e < bd:
             bd = e
             best = i
@@ -261,6 +298,28 @@ def _screened_nearest(x, row, nodes):  # type: ignore[no-untyped-def]
     return node, bd
 
 
+@njit(cache=True, inline="always", fastmath=FAST)
+def _screened_nearest_context(s, prev, row, nodes):  # type: ignore[no-untyped-def]
+    """:func:`_screened_nearest` of reading ``s``'s context (see
+    :func:`_nearest_context`); ``row`` screens the contexts' distances."""
+    if nodes.shape[1] == s.shape[0]:
+        return _screened_nearest(s, row, nodes)
+    m = np.inf
+    for i in range(row.shape[0]):
+        if row[i] < m:
+            m = row[i]
+    cut = m + 1e-3 * abs(m) + 1e-2
+    node = -1
+    bd = np.inf
+    for i in range(row.shape[0]):
+        if row[i] <= cut:
+            e = _exact_motion(s, prev, nodes, i)
+            if e < bd:
+                bd = e
+                node = i
+    return node, bd
+
+
 @njit(cache=True, fastmath=FAST)
 def decide_batch(  # type: ignore[no-untyped-def]
     s, static, nodes, screen, cand, ok, want, reach, guard, cos, sin, max_range, out
@@ -315,7 +374,7 @@ def decide_learnt(  # type: ignore[no-untyped-def]
         p[d] = np.nan
     if not _learnt_inputs(s, prev, static, out):
         return
-    node, d2 = _nearest(s, nodes)
+    node, d2 = _nearest_context(s, prev, nodes)
     k = keep if node < node_landmark.shape[0] and node_landmark[node] == prev_landmark else -1
     _learnt_choose(
         s, prev, static, node, d2, node_prior, net, wx, wy, reach, guard, alpha, beta, wait,
@@ -348,7 +407,7 @@ def decide_learnt_batch(  # type: ignore[no-untyped-def]
         x = s[b]
         if not _learnt_inputs(x, prev[b], static[b], out[b]):
             continue
-        node, bd = _screened_nearest(x, screen[b], nodes)
+        node, bd = _screened_nearest_context(x, prev[b], screen[b], nodes)
         _learnt_choose(
             x, prev[b], static[b], node, bd, node_prior, net, want[b, 0], want[b, 1],
             reach[b], guard, alpha, beta, wait, cos, sin, max_range, feat, p, out[b], True,

@@ -171,7 +171,7 @@ class LearntAgent:
         if out[3] > self.threshold * self.threshold:
             self.n_unfamiliar += 1
             if self.continual:
-                self._grow(s)
+                self._grow(self.capabilities.contexts(s, prev))
         return out[:2].copy()
 
     def decide_batch(
@@ -219,7 +219,8 @@ class LearntAgent:
                 f"static readings must have shape {s.shape}; got {st.shape}"
             )
         nodes32 = self._nodes.astype(np.float32)  # the nodes may have grown
-        screen = screen_distances(s, nodes32, (nodes32 * nodes32).sum(1))
+        q = np.ascontiguousarray(self.capabilities.contexts(s, prev))
+        screen = screen_distances(q, nodes32, (nodes32 * nodes32).sum(1))
         out = np.empty((b, 5))
         _kernels.decide_learnt_batch(
             s, prev, st, self._nodes, screen, self._prior, self._net,
@@ -233,10 +234,11 @@ class LearntAgent:
         return out[:, :2].copy(), out[:, 2].astype(np.int64)
 
     def _grow(self, s: NDArray[np.float64]) -> None:
-        """Learn an unfamiliar reading into the grown part of the context map."""
+        """Learn an unfamiliar context into the grown part of the context map."""
         if self._growth is None:
             self._growth = ContextController(self.capabilities, continual=True,
-                                             grow_every=self.grow_every)  # fmt: skip
+                                             grow_every=self.grow_every,
+                                             chain=False)  # fmt: skip
         nodes, _, _ = self._growth._learn_unfamiliar(s)
         base = len(self.capabilities.nodes)
         if len(nodes) == base:  # the second map starts once two readings have come

@@ -1,0 +1,174 @@
+"""Contexts that see motion (issue: capabilities that earn their keep, item 2): the
+context [reading, its change], the symmetry acting on both blocks alike, the learning
+chain on that space, the learnt agent recognising such contexts, and refusals."""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from copi.cli import main
+from copi.errors import CapabilitiesFormatError, InvalidArgumentError
+from copi.experiments._episode import run_agent
+from copi.experiments.methods import (
+    ABLATIONS,
+    check_preset_capabilities,
+    make_agent,
+    method_spec,
+    parse_methods,
+)
+from copi.experiments.navigation import draw_episode
+from copi.learning import Capabilities, LearnParams, SymmetryGroup, learn, ring_operators
+from copi.learning._contexts import (
+    MOTION_CLIP,
+    block_operators,
+    motion_contexts,
+    previous_in_world,
+)
+from copi.online import ContextController, CopiAgent, LearntAgent, Observation, Task
+
+
+@pytest.fixture(scope="module")
+def moving() -> Capabilities:
+    return learn(LearnParams(worlds=6, steps=150, directions=16, safety=True, probe_worlds=8,
+                             probe_steps=60, motion=True))  # fmt: skip
+
+
+readings = st.lists(st.floats(0.0, 10.0), min_size=32, max_size=32).map(np.array)
+
+
+@settings(max_examples=40, deadline=None)
+@given(s=readings, prev=readings)
+def test_a_symmetry_acts_on_the_reading_and_its_change_alike(s, prev) -> None:
+    ring = SymmetryGroup.generate(ring_operators(32))
+    both = SymmetryGroup.generate(block_operators(ring_operators(32), 2))
+    assert len(both) == len(ring) and np.allclose(both.matrices, ring.matrices)
+    x = motion_contexts(s, prev)
+    for g in range(len(ring)):
+        # turning the context = the context of the turned reading after the turned one
+        assert np.array_equal(both.apply(g, x), motion_contexts(ring.apply(g, s), ring.apply(g, prev)))
+    change = x[32:]
+    assert np.all(np.abs(change) <= MOTION_CLIP)
+    assert np.allclose(change, np.clip(s - prev, -MOTION_CLIP, MOTION_CLIP))
+
+
+def test_the_change_is_taken_within_a_world_only() -> None:
+    r = np.arange(12.0).reshape(6, 2)
+    world = np.array([0, 0, 0, 1, 1, 2])
+    prev = previous_in_world(r, world)
+    assert np.array_equal(prev[[0, 3, 5]], r[[0, 3, 5]])  # a world's first: no change
+    assert np.array_equal(prev[[1, 2, 4]], r[[0, 1, 3]])
+
+
+def test_the_chain_is_learnt_on_contexts_that_see_motion(moving, tmp_path) -> None:
+    n = 32
+    assert moving.motion and moving.n_rays == n and moving.nodes.shape[1] == 2 * n
+    assert moving.landmarks.points.shape[1] == 2 * n and moving.group.perms.shape[1] == 2 * n
+    assert (moving.nodes[:, :n] >= 0).all() and (np.abs(moving.nodes[:, n:]) <= MOTION_CLIP).all()
+    # every landmark maps onto its template through its element, on both blocks
+    tol = moving.stats["symmetry_tolerance"]
+    red, pts = moving.reduction, moving.landmarks.points
+    for j in range(len(pts)):
+        t = pts[red.templates[red.template_of[j]]]
+        assert np.abs(moving.group.apply(int(red.element[j]), pts[j]) - t).max() <= tol + 1e-12
+    # policies are learnt on the templates' reading blocks, safety priors per template
+    assert moving.policies.passable.shape == (len(red.templates), 16)
+    assert moving.safety.template_safe.shape == (len(red.templates), 16)
+    back = Capabilities.load(moving.save(tmp_path / "m.npz"))
+    assert back.equals(moving) and back.motion
+    # a file claiming motion whose nodes are readings only is refused
+    claimed = dataclasses.replace(moving, params={**moving.params, "motion": False})
+    claimed.save(tmp_path / "bad.npz")
+    with pytest.raises(CapabilitiesFormatError, match="64 components but 1 x its sensor's 32"):
+        Capabilities.load(tmp_path / "bad.npz")
+
+
+def test_the_learnt_agent_recognises_the_context_with_its_motion(moving) -> None:
+    agent = LearntAgent(moving, alpha=2.0, beta=0.5, wait=False)
+    rng = np.random.default_rng(3)
+    s = rng.uniform(0.3, 10.0, (60, 32))
+    prev = s + rng.normal(0, 0.8, s.shape)
+    want = rng.normal(size=(60, 2))
+    actions, nodes = agent.decide_batch(s, prev, want)
+    ctx = moving.contexts(s, prev)
+    expected = ((ctx[:, None, :] - moving.nodes[None]) ** 2).sum(-1).argmin(1)
+    assert np.array_equal(nodes, expected)
+    # the same reading after another previous one may be another context
+    still = ((s[:, None, :] - moving.nodes[None, :, :32]) ** 2).sum(-1).argmin(1)
+    _, nodes_still = agent.decide_batch(s, s, want)
+    assert np.array_equal(
+        nodes_still, ((moving.contexts(s)[:, None] - moving.nodes[None]) ** 2).sum(-1).argmin(1)
+    )
+    assert not np.array_equal(nodes, nodes_still) or not np.array_equal(nodes, still)
+    # one at a time: the agent's own previous reading makes the change
+    task = Task("sensor", 0.3, 0.5, 32, 10.0)
+    agent.reset(task)
+    for i in range(5):
+        agent.act(Observation(s[i], np.array([5.0, 0.0])))
+        ref = moving.contexts(s[i], s[i - 1] if i else s[i])
+        node = int(((ref - moving.nodes) ** 2).sum(1).argmin())
+        assert agent._context == int(moving.node_template[node])
+
+
+def test_grown_contexts_see_motion_too(moving) -> None:
+    agent = LearntAgent(moving, continual=True, grow_every=5, wait=False)
+    agent.reset(Task("sensor", 0.3, 0.5, 32, 10.0))
+    agent.threshold = 1.0
+    rng = np.random.default_rng(0)
+    for _ in range(30):
+        agent.act(Observation(rng.uniform(0.3, 10.0, 32), np.array([5.0, 0.0])))
+    assert agent.n_learnt > 0 and agent._nodes.shape[1] == 64
+
+
+def test_the_chain_and_the_presets_refuse_what_does_not_fit(moving, tmp_path, capsys) -> None:
+    with pytest.raises(InvalidArgumentError, match="contexts that see motion"):
+        ContextController(moving)
+    with pytest.raises(InvalidArgumentError, match="contexts that see motion"):
+        CopiAgent(moving, guard=1.2)
+    with pytest.raises(InvalidArgumentError, match="learnt with contexts that see motion"):
+        check_preset_capabilities("learnt", moving)
+    still = dataclasses.replace(moving, params={**moving.params, "motion": False})
+    with pytest.raises(InvalidArgumentError, match="learnt without contexts that see motion"):
+        check_preset_capabilities("learnt-motion", still)
+    check_preset_capabilities("learnt-motion", moving)
+    path = moving.save(tmp_path / "m.npz")
+    for args in (
+        ["learn", "-o", str(tmp_path / "x.npz"), "--preset", "extended", "--motion"],
+        ["evaluate", str(path), "-o", str(tmp_path / "r.sqlite"), "--preset", "extended",
+         "--worlds", "1"],
+        ["pursuit", str(path), "-o", str(tmp_path / "g.sqlite"), "--preset", "learnt-motion",
+         "--games", "1"],
+    ):  # fmt: skip
+        with pytest.raises(SystemExit) as exit_:
+            main(args)
+        err = capsys.readouterr().err
+        assert exit_.value.code == 2, (args, err)
+        assert "Traceback" not in err and len(err.strip().splitlines()) == 1, err
+    assert not (tmp_path / "x.npz").exists() and not (tmp_path / "r.sqlite").exists()
+
+
+def test_the_ablations_are_named_and_run(moving) -> None:
+    chosen = parse_methods("ablations")
+    names = [m for m, _ in chosen]
+    assert set(names) == set(ABLATIONS) and {lv for _, lv in chosen} == {"map", "sensor"}
+    assert "copi-learnt+motion" not in [m for m, _ in parse_methods(None)]
+    still = learn(LearnParams(worlds=6, steps=150, directions=16, safety=True, probe_worlds=8,
+                              probe_steps=60))  # fmt: skip
+    base = draw_episode("crowd", 0, 3)
+    runs = {}
+    for name in ABLATIONS:
+        spec = method_spec(name)
+        caps = {"learnt": still, "learnt-motion": moving}.get(spec.capabilities or "")
+        agent = make_agent(name, caps)
+        sim = copy.deepcopy(base)
+        res = run_agent(agent, sim, sensing="map", max_steps=120)
+        runs[name] = (res.outcome, res.steps, round(res.path_length, 9))
+    assert isinstance(make_agent("copi-learnt+motion", moving), LearntAgent)
+    assert make_agent("copi-learnt+priors", still).beta > 0
+    assert make_agent("copi-learnt+persist", still).persist > 0
+    assert len(runs) == len(ABLATIONS)

@@ -84,6 +84,25 @@ def main() -> bool:
             sorted(timeit.repeat(learnt_decision, number=20000, repeat=5))[2] / 20000,
         )
     )
+    # contexts that see motion (copi-learnt+motion, an ablation: no goal of its own)
+    moving = learn(LearnParams(directions=16, safety=True, motion=True))
+    magent = LearntAgent(moving, guard=1.05, alpha=2.0, beta=0.25, wait=False)
+    margs = (magent._nodes, magent._prior, magent._net)
+
+    def motion_decision() -> None:
+        k = next(j) % 2000
+        _kernels.decide_learnt(
+            readings[k], readings[k - 1], static, *margs, want[k, 0], want[k, 1], 5.0, 1.05,
+            2.0, 0.25, False, cs, sn, 10.0, feat, p, out, magent._landmarks, -1, -1, 0.0,
+        )  # fmt: skip
+
+    motion_decision()
+    rows.append(
+        Timing(
+            "learnt, contexts that see motion: decide, one agent",
+            sorted(timeit.repeat(motion_decision, number=20000, repeat=5))[2] / 20000,
+        )
+    )
     prev_batch = readings[999:1999]
     static_batch = np.full(batch.shape, np.inf)
     agent.decide_batch(batch, prev_batch, want[:1000], 5.0, static_batch)
@@ -102,7 +121,7 @@ def main() -> bool:
         rows,
         None,
         {rows[0].name: 10e-6, rows[1].name: 10e-6, rows[2].name: 3e-6, rows[3].name: 10e-6,
-         rows[4].name: 3e-6},
+         rows[5].name: 3e-6},
     )
     cfg = NavigationConfig(str(caps_path), worlds=400, method="copi-extended", guard=1.2)
     walls = {}

@@ -152,7 +152,7 @@ def test_the_chain_and_the_presets_refuse_what_does_not_fit(moving, tmp_path, ca
     assert not (tmp_path / "x.npz").exists() and not (tmp_path / "r.sqlite").exists()
 
 
-def test_the_ablations_are_named_and_run(moving) -> None:
+def test_the_ablations_are_named_and_run(moving, tmp_path) -> None:
     chosen = parse_methods("ablations")
     names = [m for m, _ in chosen]
     assert set(names) == set(ABLATIONS) and {lv for _, lv in chosen} == {"map", "sensor"}
@@ -172,3 +172,15 @@ def test_the_ablations_are_named_and_run(moving) -> None:
     assert make_agent("copi-learnt+priors", still).beta > 0
     assert make_agent("copi-learnt+persist", still).persist > 0
     assert len(runs) == len(ABLATIONS)
+    # in the benchmark, on the same episodes, paired against copi-learnt
+    from copi.experiments.benchmark import BenchmarkConfig, run_benchmark
+    from copi.experiments.benchmark_report import write_benchmark_report
+
+    caps = {"learnt": str(still.save(tmp_path / "l.npz")),
+            "learnt-motion": str(moving.save(tmp_path / "m.npz"))}  # fmt: skip
+    methods = tuple(parse_methods("copi-learnt@map,copi-learnt+motion@map,compass-guard@map"))
+    cfg = BenchmarkConfig(methods=methods, families=("star",), episodes=3, capabilities=caps)
+    run_benchmark(cfg, tmp_path / "a.sqlite", workers=1)
+    text = write_benchmark_report(tmp_path / "a.sqlite", tmp_path / "rep").read_text()
+    assert "the method minus copi-learnt at the same level" in text
+    assert "| copi-learnt+motion | map |" in text and "| compass-guard | map |" in text

@@ -21,7 +21,9 @@ __all__ = ["PairedDifference", "paired_difference", "write_benchmark_report"]
 
 REFERENCE = "copi-extended"
 """The copi mode every other row is paired against (at the same level; oracle rows
-against its ``map`` row)."""
+against its ``map`` row) — or, in a run without it, :data:`FALLBACK_REFERENCE` (a run of
+the learnt preset's ablations)."""
+FALLBACK_REFERENCE = "copi-learnt"
 
 
 @dataclass(frozen=True)
@@ -210,6 +212,12 @@ def write_benchmark_report(
     if not groups:
         raise FileNotFoundError(f"no benchmark runs in {results}")
     order = {m: i for i, m in enumerate(METHODS)}
+    present = {m for g in groups.values() for m, _ in g}
+    reference = (
+        REFERENCE
+        if REFERENCE in present or FALLBACK_REFERENCE not in present
+        else FALLBACK_REFERENCE
+    )
     from copi.experiments.benchmark import BENCHMARK_FAMILIES
 
     families = [f for f in BENCHMARK_FAMILIES if f in groups] + sorted(
@@ -225,10 +233,10 @@ def write_benchmark_report(
         "is the shortest path to the goal's tolerance disc on the snapshot at t = 0 with the "
         "obstacles frozen. Sensing: `sensor` = ranges + goal relative to the agent; `map` = "
         "plus the static world; `oracle` = plus obstacle positions and velocities. "
-        f"Δ columns: the method minus {REFERENCE} at the same level (oracle rows: minus its "
+        f"Δ columns: the method minus {reference} at the same level (oracle rows: minus its "
         "`map` row) on the same episodes, in points, with 95 % bootstrap intervals; Δ excess "
         "over the episodes both succeeded in. **copi loses** marks a row whose success is "
-        f"higher than {REFERENCE}'s with an interval excluding zero. Steps to goal, "
+        f"higher than {reference}'s with an interval excluding zero. Steps to goal, "
         "clearance (the least surface distance to a moving obstacle over an episode, "
         "negative after a contact) and turning per step (the sum of turning angles between "
         "moves over the steps) are medians; steps and turning over successful episodes. "
@@ -264,9 +272,9 @@ def write_benchmark_report(
         for method, level in keys:
             s = table[family][(method, level)]
             ref_level = level if level != "oracle" else "map"
-            ref = g.get((REFERENCE, ref_level))
+            ref = g.get((reference, ref_level))
             d_s = d_e = PairedDifference(math.nan, math.nan, math.nan, 0)
-            if ref is not None and method != REFERENCE:
+            if ref is not None and method != reference:
                 d_s, d_e = _pair(g[(method, level)], ref)
             flag = ""
             if d_s.excludes_zero:

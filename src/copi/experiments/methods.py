@@ -142,8 +142,10 @@ _MAP_AND_SENSOR = ("sensor", "map")
 # docs/tuning.md). navground's ORCA was not tuned.
 _NAVGROUND_MARGIN = {"navground-hrvo": 0.6, "navground-hl": 0.3}
 _LEARNT: dict[str, Any] = {"guard": 1.05, "alpha": 2.0, "beta": 0.0, "wait": False}
-_BETA = 0.5
-"""Weight of the template priors in the ablations that use them (validation seed 1)."""
+_BETA_PRIORS = 0.5
+_BETA_MOTION = 0.25
+"""Weights of the template priors in the ablations that use them: each chosen among 0.25,
+0.5, 1 and 2 by benchmarks/tune.py (validation seed 1; the table is docs/tuning.md)."""
 _PERSIST = 0.05
 """Persistence bonus of copi-learnt+persist (the smaller of the two validated, see the
 README: the larger cost up to 5 points of success)."""
@@ -178,13 +180,13 @@ METHODS: dict[str, MethodSpec] = {
             "copi-learnt+priors", "sensor", _MAP_AND_SENSOR,
             "copi-learnt plus the per-template safety priors (contexts of the reading "
             "alone, each move read through the template's symmetry) in each move's score",
-            {**_LEARNT, "beta": _BETA}, capabilities="learnt", ablation=True,
+            {**_LEARNT, "beta": _BETA_PRIORS}, capabilities="learnt", ablation=True,
         ),
         MethodSpec(
             "copi-learnt+motion", "sensor", _MAP_AND_SENSOR,
             "copi-learnt+priors with contexts that see motion: context map, landmarks, "
             "templates and their priors over [reading, its change]",
-            {**_LEARNT, "beta": _BETA}, capabilities="learnt-motion", ablation=True,
+            {**_LEARNT, "beta": _BETA_MOTION}, capabilities="learnt-motion", ablation=True,
         ),
         MethodSpec(
             "copi-learnt+persist", "sensor", _MAP_AND_SENSOR,

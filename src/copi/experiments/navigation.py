@@ -18,7 +18,7 @@ from copi.experiments._runs import RunIdentity, file_sha, run_into_store
 from copi.experiments.methods import make_agent, method_spec
 from copi.geometry._arrays import positive_int
 from copi.learning import Capabilities
-from copi.online import ContextController, check_sensing, check_strategy
+from copi.online import ContextController, LearntAgent, check_sensing, check_strategy
 from copi.world import (
     RangeSensor,
     Simulator,
@@ -178,8 +178,14 @@ def episode_world_name(
 def _capabilities(path: str, sha: str) -> Capabilities:
     del sha  # part of the cache key: a rewritten file is read again
     caps = Capabilities.load(path)
-    # Load the compiled chain now, so that no episode's decision time includes it.
-    ContextController(caps).decide(np.full(caps.n_rays, 5.0), [1.0, 0.0])
+    # Load the compiled chain now, so that no episode's decision time includes it (the
+    # chain does not take contexts that see motion: those serve the learnt preset only).
+    if caps.motion:
+        if caps.safety is not None:
+            s = np.full((1, caps.n_rays), 5.0)
+            LearntAgent(caps).decide_batch(s, s, [[1.0, 0.0]])
+    else:
+        ContextController(caps).decide(np.full(caps.n_rays, 5.0), [1.0, 0.0])
     return caps
 
 

@@ -41,24 +41,19 @@ def _nearest(x, nodes):  # type: ignore[no-untyped-def]
     return best, bd
 
 
-@njit(cache=True, inline="always", fastmath=FAST)
-def _exact_motion(s, prev, nodes, i):  # type: ignore[no-untyped-def]
-    """Squared distance from the context [s, clip(s - prev)] (contexts that see motion,
-    :mod:`copi.learning._contexts`) to node i, without building the context."""
+@njit(cache=True, inline="always")
+def _context(s, prev, dim):  # type: ignore[no-untyped-def]
+    """The context of reading ``s`` as nodes of ``dim`` components hold it: ``s``, or
+    [s, clip(s - prev)] (contexts that see motion, :mod:`copi.learning._contexts`),
+    built once so that the distance sums below vectorise."""
     n = s.shape[0]
-    e = 0.0
+    q = np.empty(dim)
     for j in range(n):
-        diff = s[j] - nodes[i, j]
-        e += diff * diff
-    for j in range(n):
-        c = s[j] - prev[j]
-        if c > MOTION_CLIP:
-            c = MOTION_CLIP
-        elif c < -MOTION_CLIP:
-            c = -MOTION_CLIP
-        diff = c - nodes[i, n + j]
-        e += diff * diff
-    return e
+        q[j] = s[j]
+    for j in range(n, dim):
+        c = s[j - n] - prev[j - n]
+        q[j] = MOTION_CLIP if c > MOTION_CLIP else -MOTION_CLIP if c < -MOTION_CLIP else c
+    return q
 
 
 @njit(cache=True, inline="always", fastmath=FAST)
@@ -67,14 +62,7 @@ def _nearest_context(s, prev, nodes):  # type: ignore[no-untyped-def]
     twice its length, [s, clip(s - prev)]."""
     if nodes.shape[1] == s.shape[0]:
         return _nearest(s, nodes)
-    best = -1
-    bd = np.inf
-    for i in range(nodes.shape[0]):
-        e = _exact_motion(s, prev, nodes, i)
-        if e < bd:
-            bd = e
-            best = i
-    return best, bd
+    return _nearest(_context(s, prev, nodes.shape[1]), nodes)
 
 
 # fastmath on the callers too: numba inlines _nearest at the IR level, where the
@@ -304,20 +292,7 @@ def _screened_nearest_context(s, prev, row, nodes):  # type: ignore[no-untyped-d
     :func:`_nearest_context`); ``row`` screens the contexts' distances."""
     if nodes.shape[1] == s.shape[0]:
         return _screened_nearest(s, row, nodes)
-    m = np.inf
-    for i in range(row.shape[0]):
-        if row[i] < m:
-            m = row[i]
-    cut = m + 1e-3 * abs(m) + 1e-2
-    node = -1
-    bd = np.inf
-    for i in range(row.shape[0]):
-        if row[i] <= cut:
-            e = _exact_motion(s, prev, nodes, i)
-            if e < bd:
-                bd = e
-                node = i
-    return node, bd
+    return _screened_nearest(_context(s, prev, nodes.shape[1]), row, nodes)
 
 
 @njit(cache=True, fastmath=FAST)

@@ -184,3 +184,19 @@ def test_the_ablations_are_named_and_run(moving, tmp_path) -> None:
     text = write_benchmark_report(tmp_path / "a.sqlite", tmp_path / "rep").read_text()
     assert "the method minus copi-learnt at the same level" in text
     assert "| copi-learnt+motion | map |" in text and "| compass-guard | map |" in text
+
+
+def test_contexts_of_another_shape_than_the_sensor_gives_are_refused(moving, tmp_path, capsys):
+    # a 64-component context is a 32-ray sensor's reading and change: accepted for 32 rays
+    LearntAgent(moving).reset(Task("sensor", 0.3, 0.5, 32, 10.0))
+    with pytest.raises(InvalidArgumentError, match="learnt for 32 rays; the sensor has 64"):
+        LearntAgent(moving).reset(Task("sensor", 0.3, 0.5, 64, 10.0))
+    narrow = learn(LearnParams(worlds=2, steps=50, directions=16, safety=True, probe_worlds=2,
+                               probe_steps=20, n_rays=16))  # fmt: skip
+    path = narrow.save(tmp_path / "n16.npz")
+    with pytest.raises(SystemExit) as exit_:
+        main(["lifelong", str(path), "-o", str(tmp_path / "l.sqlite"), "--worlds", "1",
+              "--tasks", "2"])  # fmt: skip
+    err = capsys.readouterr().err
+    assert exit_.value.code == 2 and "learnt for 16 rays; the sensor has 32" in err
+    assert len(err.strip().splitlines()) == 1 and not (tmp_path / "l.sqlite").exists()

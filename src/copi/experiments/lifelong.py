@@ -151,6 +151,11 @@ class LifelongConfig:
 
         caps = Capabilities.load(self.capabilities)
         check_preset_capabilities("learnt", caps, self.capabilities)
+        rays = RangeSensor().n_rays  # the lives' sensor
+        if caps.n_rays != rays:
+            raise InvalidArgumentError(
+                f"the capabilities were learnt for {caps.n_rays} rays; the sensor has {rays}"
+            )
         done = dataclasses.replace(self, capabilities_sha=file_sha(self.capabilities))
         if self.from_maps is None:
             return done

@@ -88,6 +88,13 @@ def main() -> None:
     a = ap.parse_args()
     if a.methods:
         keep = a.methods.split(",")
+        unknown = [m for m in keep if m not in GRID]
+        if unknown or a.out == "docs/tuning.md":
+            raise SystemExit(
+                f"tune.py: unknown methods {unknown} (known: {', '.join(GRID)})"
+                if unknown
+                else "tune.py: --methods tunes a part: give --out (docs/tuning.md holds all)"
+            )
         for m in list(GRID):
             if m not in keep:
                 del GRID[m]

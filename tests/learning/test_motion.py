@@ -85,7 +85,17 @@ def test_the_chain_is_learnt_on_contexts_that_see_motion(moving, tmp_path) -> No
     claimed = dataclasses.replace(moving, params={**moving.params, "motion": False})
     claimed.save(tmp_path / "bad.npz")
     with pytest.raises(CapabilitiesFormatError, match="64 components but 1 x its sensor's 32"):
-        Capabilities.load(tmp_path / "bad.npz")
+        Capabilities.load(tmp_path / "bad.npz")  # 64-wide nodes that claim no motion
+    tampered = dataclasses.replace(moving, nodes=moving.nodes.copy())
+    tampered.nodes[0, 40] = 50.0  # a change beyond the clip
+    tampered.save(tmp_path / "far.npz")
+    with pytest.raises(CapabilitiesFormatError, match="changes beyond"):
+        Capabilities.load(tmp_path / "far.npz")
+    with pytest.raises(InvalidArgumentError, match="motion must be True or False"):
+        LearnParams(motion=1)
+    from copi.online import _kernels
+
+    assert _kernels.MOTION_CLIP == MOTION_CLIP  # the compiled copy of the constant
 
 
 def test_the_learnt_agent_recognises_the_context_with_its_motion(moving) -> None:
@@ -104,7 +114,22 @@ def test_the_learnt_agent_recognises_the_context_with_its_motion(moving) -> None
     assert np.array_equal(
         nodes_still, ((moving.contexts(s)[:, None] - moving.nodes[None]) ** 2).sum(-1).argmin(1)
     )
-    assert not np.array_equal(nodes, nodes_still) or not np.array_equal(nodes, still)
+    del still
+    # a node's own context (its reading after the reading its change implies) finds that
+    # node; the same reading with no change finds another, for nodes that see motion
+    r, c = moving.nodes[:, :32], moving.nodes[:, 32:]
+    moved = np.flatnonzero(np.abs(c).max(1) > 0.5)
+    assert len(moved)
+    _, own = agent.decide_batch(r[moved], r[moved] - c[moved], want[: len(moved)])
+    assert np.array_equal(own, moved)
+    i = int(moved[0])
+    task = Task("sensor", 0.3, 0.5, 32, 10.0)
+    for prev_i, far in ((r[i] - c[i], False), (r[i], True)):
+        agent.reset(task)
+        agent._prev = prev_i.copy()
+        agent.act(Observation(r[i], np.array([5.0, 0.0])))
+        full = ((moving.contexts(r[i], prev_i) - moving.nodes) ** 2).sum(1)
+        assert np.isclose(agent._out[3], full.min()) and (agent._out[3] > 0.1) == far
     # one at a time: the agent's own previous reading makes the change
     task = Task("sensor", 0.3, 0.5, 32, 10.0)
     agent.reset(task)
@@ -112,6 +137,7 @@ def test_the_learnt_agent_recognises_the_context_with_its_motion(moving) -> None
         agent.act(Observation(s[i], np.array([5.0, 0.0])))
         ref = moving.contexts(s[i], s[i - 1] if i else s[i])
         node = int(((ref - moving.nodes) ** 2).sum(1).argmin())
+        assert int(agent._out[2]) == node
         assert agent._context == int(moving.node_template[node])
 
 
@@ -123,6 +149,8 @@ def test_grown_contexts_see_motion_too(moving) -> None:
     for _ in range(30):
         agent.act(Observation(rng.uniform(0.3, 10.0, 32), np.array([5.0, 0.0])))
     assert agent.n_learnt > 0 and agent._nodes.shape[1] == 64
+    grown = agent._nodes[len(moving.nodes) :]
+    assert (np.abs(grown[:, 32:]).max(1) > 0.1).all()  # grown from readings with their change
 
 
 def test_the_chain_and_the_presets_refuse_what_does_not_fit(moving, tmp_path, capsys) -> None:
@@ -139,6 +167,10 @@ def test_the_chain_and_the_presets_refuse_what_does_not_fit(moving, tmp_path, ca
     path = moving.save(tmp_path / "m.npz")
     for args in (
         ["learn", "-o", str(tmp_path / "x.npz"), "--preset", "extended", "--motion"],
+        ["learn", "-o", str(tmp_path / "x.npz"), "--motion"],
+        ["evaluate", str(path), "-o", str(tmp_path / "r.sqlite"), "--method", "copi-learnt",
+         "--worlds", "1"],
+        ["evaluate", str(path), "-o", str(tmp_path / "r.sqlite"), "--worlds", "1"],
         ["evaluate", str(path), "-o", str(tmp_path / "r.sqlite"), "--preset", "extended",
          "--worlds", "1"],
         ["pursuit", str(path), "-o", str(tmp_path / "g.sqlite"), "--preset", "learnt-motion",
@@ -148,7 +180,7 @@ def test_the_chain_and_the_presets_refuse_what_does_not_fit(moving, tmp_path, ca
             main(args)
         err = capsys.readouterr().err
         assert exit_.value.code == 2, (args, err)
-        assert "Traceback" not in err and len(err.strip().splitlines()) == 1, err
+        assert "Traceback" not in err and err.count("copi: error:") == 1, err
     assert not (tmp_path / "x.npz").exists() and not (tmp_path / "r.sqlite").exists()
 
 

@@ -50,7 +50,10 @@ def evaluate_command(
     ] = None,
     preset: Annotated[
         str | None,
-        typer.Option("--preset", help="copi's mode: faithful, extended or learnt (method, guard)."),
+        typer.Option(
+            "--preset",
+            help="copi's mode: faithful, extended, learnt or learnt-motion (method, guard).",
+        ),
     ] = None,
     worlds: Annotated[int, typer.Option("--worlds", min=1, help="Episodes (paper: 1549).")] = 1549,
     family: Annotated[str, typer.Option("--family", help="World family.")] = "star",

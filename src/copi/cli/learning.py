@@ -52,7 +52,10 @@ def learn_command(
     ] = None,
     motion: Annotated[
         bool,
-        typer.Option("--motion", help="Contexts that see motion: [reading, its change]."),
+        typer.Option(
+            "--motion",
+            help="Contexts that see motion: [reading, its change] (--preset learnt-motion).",
+        ),
     ] = False,
 ) -> None:
     """Learn capabilities offline, without any task (paper §II): explore, grow the
@@ -70,11 +73,15 @@ def learn_command(
             )
         directions = want
     safety = preset is not None and get_preset(preset).learn.safety
+    if motion and preset != "learnt-motion":
+        # only the learnt preset's agent recognises such contexts, and it needs the
+        # safety priors that preset learns
+        raise InvalidArgumentError(
+            f"--motion needs --preset learnt-motion (got {preset or 'no preset'}): only the "
+            "learnt preset's agent recognises contexts that see motion"
+        )
     if preset is not None:
-        want_motion = get_preset(preset).learn.motion
-        if motion and not want_motion:
-            raise InvalidArgumentError(f"--motion contradicts --preset {preset} (no motion)")
-        motion = want_motion
+        motion = get_preset(preset).learn.motion
     params = LearnParams(
         worlds=worlds,
         steps=steps,

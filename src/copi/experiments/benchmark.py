@@ -26,6 +26,7 @@ from copi.experiments._episode import optimal_to_goal, run_agent
 from copi.experiments._runs import Tally, code_version, execute, file_sha, stops_cleanly
 from copi.experiments.methods import (
     CAPABILITY_PRESETS,
+    check_method_capabilities,
     make_agent,
     method_spec,
     parse_methods,
@@ -102,7 +103,10 @@ class BenchmarkConfig:
         """With the content hash of each capabilities file (checks each loads)."""
         shas = {}
         for preset, path in self.capabilities.items():
-            Capabilities.load(path)
+            caps = Capabilities.load(path)
+            for m, _ in self.methods:
+                if method_spec(m).capabilities == preset:
+                    check_method_capabilities(m, caps, path)
             shas[preset] = file_sha(path)
         return dataclasses.replace(self, capabilities_sha=shas)
 

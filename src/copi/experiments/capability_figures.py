@@ -130,7 +130,7 @@ def save_landmarks(caps: Capabilities, out: Path) -> Path:
     centre, rays in the world frame), coloured by template, with the operator word that
     maps it onto its template; templates framed."""
     max_range = float(caps.params.get("max_range", caps.nodes.max()))
-    pts = caps.landmarks.points
+    pts = caps.landmarks.points[:, : caps.n_rays]  # the reading block (motion aside)
     n = len(pts)
     cols = min(10, n)
     rows = math.ceil(n / cols)
@@ -163,7 +163,7 @@ def save_policies(caps: Capabilities, out: Path) -> Path:
     direction, in the template's frame."""
     max_range = float(caps.params.get("max_range", caps.nodes.max()))
     red, pol = caps.reduction, caps.policies
-    templates = caps.landmarks.points[red.templates]
+    templates = caps.landmarks.points[red.templates][:, : caps.n_rays]  # the reading block
     n = len(templates)
     cols = min(8, n)
     rows = math.ceil(n / cols)

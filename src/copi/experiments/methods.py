@@ -27,6 +27,7 @@ __all__ = [
     "CAPABILITY_PRESETS",
     "PRESETS",
     "Preset",
+    "check_method_capabilities",
     "check_preset_capabilities",
     "preset",
     "METHODS",
@@ -85,6 +86,28 @@ def preset(name: str) -> Preset:
         raise InvalidArgumentError(
             f"preset must be one of {', '.join(PRESETS)}; got {name!r}"
         ) from None
+
+
+def check_method_capabilities(method: str, caps: Capabilities, where: str = "the file") -> None:
+    """Refuse capabilities that method ``method`` cannot run as it is registered: a learnt
+    method needs safety priors, and its contexts see motion exactly when its preset's do
+    (run otherwise, its results would be another method's under its name)."""
+    spec = method_spec(method)
+    if spec.capabilities is None:
+        return
+    want = CAPABILITY_PRESETS[spec.capabilities]
+    if want.safety and caps.safety is None:
+        raise InvalidArgumentError(
+            f"{where} has no safety priors; {method} needs them: learn it with "
+            f"copi learn --preset {spec.capabilities}"
+        )
+    if caps.motion != want.motion:
+        which = "with" if caps.motion else "without"
+        raise InvalidArgumentError(
+            f"{where} was learnt {which} contexts that see motion; {method} needs "
+            f"{'them' if want.motion else 'none'}: learn it with copi learn --preset "
+            f"{spec.capabilities}"
+        )
 
 
 def check_preset_capabilities(name: str, caps: Capabilities, where: str = "the file") -> None:
@@ -173,9 +196,9 @@ METHODS: dict[str, MethodSpec] = {
             "hand-written guard kept as a filter",
             _LEARNT, capabilities="learnt",
         ),
-        # The learnt preset's ablations (issue: "each one an option, each one ablated"):
-        # each differs from copi-learnt in one thing; compass-guard is copi-learnt with
-        # nothing learnt (alpha = beta = 0).
+        # The learnt preset's ablations: +priors and +persist differ from copi-learnt in
+        # one thing each, +motion from +priors in one (its contexts); compass-guard is
+        # copi-learnt with nothing learnt (alpha = beta = 0).
         MethodSpec(
             "copi-learnt+priors", "sensor", _MAP_AND_SENSOR,
             "copi-learnt plus the per-template safety priors (contexts of the reading "

@@ -15,7 +15,7 @@ import numpy as np
 from copi.errors import InvalidArgumentError, InvalidWorldError, WorldFileError
 from copi.experiments._episode import EpisodeOutcome, optimal_to_goal, run_agent
 from copi.experiments._runs import RunIdentity, file_sha, run_into_store
-from copi.experiments.methods import make_agent, method_spec
+from copi.experiments.methods import check_method_capabilities, make_agent, method_spec
 from copi.geometry._arrays import positive_int
 from copi.learning import Capabilities
 from copi.online import ContextController, LearntAgent, check_sensing, check_strategy
@@ -343,6 +343,11 @@ def evaluate(
     committed at once.
     """
     config = config.resolved()
+    if config.capabilities is not None:  # before anything is written
+        check_method_capabilities(
+            config.method, _capabilities(config.capabilities, config.capabilities_sha),
+            config.capabilities,
+        )  # fmt: skip
     if config.world_file is not None:
         check_world_file(config.world_file, agent_radius=config.agent_radius)
     return run_into_store(

@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 
 from copi._files import write_npz
 from copi.errors import CapabilitiesFormatError
-from copi.learning._contexts import context_blocks, motion_contexts
+from copi.learning._contexts import MOTION_CLIP, context_blocks, motion_contexts
 from copi.learning._policies import ActionPriors, PolicySet
 from copi.learning._safety import SafetyModel
 from copi.learning._skeleton import Landmarks
@@ -508,6 +508,15 @@ def _more_problems(c: Capabilities) -> list[str]:
     problems = []
     if (c.nodes[:, : c.n_rays] < 0).any():
         problems.append("map nodes hold negative ranges")
+    if c.motion and dim == 2 * c.n_rays:
+        for what, pts in (("map nodes", c.nodes), ("landmark points", lm.points)):
+            change = pts[:, c.n_rays :] if pts.shape[1:] == (dim,) else np.zeros(0)
+            if not (np.abs(change) <= MOTION_CLIP + 1e-9).all():
+                problems.append(f"{what} hold changes beyond +-{MOTION_CLIP} (the clip)")
+        if g.perms.ndim == 2 and g.perms.shape[1] == dim and not (
+            g.perms[:, c.n_rays :] == g.perms[:, : c.n_rays] + c.n_rays
+        ).all():
+            problems.append("the group does not act on the reading and its change alike")
     if lm.anchors.shape != (L,) or not _in_range(lm.anchors, n):
         problems.append(f"landmark anchors must be {L} nodes in 0..{n - 1}")
     if not _in_range(lm.merges, n + len(lm.merges)):

@@ -92,6 +92,11 @@ class LearnParams:
                      "probe_steps", "probe_horizon"):  # fmt: skip
             positive_int(getattr(self, name), name)
         check_family(self.family)
+        for name in ("safety", "motion"):
+            if not isinstance(getattr(self, name), bool):
+                raise InvalidArgumentError(
+                    f"{name} must be True or False; got {getattr(self, name)!r}"
+                )
         for fam in self.probe_families.split(","):
             check_family(fam.strip())
         if self.learner not in ("astar", "value-iteration"):

@@ -13,7 +13,6 @@ import math
 import numpy as np
 from numba import njit
 
-from copi.learning._contexts import MOTION_CLIP
 from copi.learning._gng_kernels import FAST
 from copi.learning._safety import ring_features, safety_of, safety_probabilities
 
@@ -39,6 +38,12 @@ def _nearest(x, nodes):  # type: ignore[no-untyped-def]
             bd = e
             best = i
     return best, bd
+
+
+MOTION_CLIP = 1.5
+"""copi.learning._contexts.MOTION_CLIP, repeated here: numba's cache sees only this
+file's changes, so a constant imported from another file could go stale in compiled
+kernels (a test checks that the two agree)."""
 
 
 @njit(cache=True, inline="always")

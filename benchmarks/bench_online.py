@@ -13,6 +13,7 @@ from __future__ import annotations
 import tempfile
 import time
 import timeit
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -62,22 +63,28 @@ def main() -> bool:
     ]
     from copi.online import _kernels
 
-    learnt = learn(LearnParams(directions=16, safety=True))
-    agent = LearntAgent(learnt, guard=1.05, alpha=2.0, beta=0.0, wait=False)  # the preset
-    args = (agent._nodes, agent._prior, agent._net)
     static = np.full(caps.n_rays, np.inf)
     p, out, feat = np.empty(17), np.empty(5), np.empty(8 * caps.n_rays)
-    cs, sn = agent._cos, agent._sin
-
-    def learnt_decision() -> None:
-        k = next(j) % 2000
-        _kernels.decide_learnt(
-            readings[k], readings[k - 1], static, *args, want[k, 0], want[k, 1], 5.0, 1.05,
-            2.0, 0.0, False, cs, sn, 10.0, feat, p, out, agent._landmarks, -1, -1, 0.0,
-        )  # fmt: skip
-
     j = iter(range(1, 10**9))
-    learnt_decision()
+
+    def one_decision(a: LearntAgent) -> Callable[[], None]:
+        """One of ``a``'s decisions (the kernel alone) on the next stored reading."""
+        args = (a._nodes, a._prior, a._net)
+
+        def decide() -> None:
+            k = next(j) % 2000
+            _kernels.decide_learnt(
+                readings[k], readings[k - 1], static, *args, want[k, 0], want[k, 1], 5.0,
+                a.guard, a.alpha, a.beta, a.wait, a._cos, a._sin, 10.0, feat, p, out,
+                a._landmarks, -1, -1, 0.0,
+            )  # fmt: skip
+
+        decide()
+        return decide
+
+    learnt = learn(LearnParams(directions=16, safety=True))
+    agent = LearntAgent(learnt, guard=1.05, alpha=2.0, beta=0.0, wait=False)  # the preset
+    learnt_decision = one_decision(agent)
     rows.append(
         Timing(
             "learnt preset: decide, one agent",
@@ -86,17 +93,9 @@ def main() -> bool:
     )
     # contexts that see motion (copi-learnt+motion, an ablation: no goal of its own)
     moving = learn(LearnParams(directions=16, safety=True, motion=True))
-    magent = LearntAgent(moving, guard=1.05, alpha=2.0, beta=0.25, wait=False)
-    margs = (magent._nodes, magent._prior, magent._net)
-
-    def motion_decision() -> None:
-        k = next(j) % 2000
-        _kernels.decide_learnt(
-            readings[k], readings[k - 1], static, *margs, want[k, 0], want[k, 1], 5.0, 1.05,
-            2.0, 0.25, False, cs, sn, 10.0, feat, p, out, magent._landmarks, -1, -1, 0.0,
-        )  # fmt: skip
-
-    motion_decision()
+    motion_decision = one_decision(
+        LearntAgent(moving, guard=1.05, alpha=2.0, beta=0.25, wait=False)
+    )
     rows.append(
         Timing(
             "learnt, contexts that see motion: decide, one agent",

@@ -88,43 +88,40 @@ def preset(name: str) -> Preset:
         ) from None
 
 
+def _check_learnt_like(
+    caps: Capabilities, want: LearnParams, who: str, preset_name: str, where: str
+) -> None:
+    """Refuse capabilities without the safety priors ``want`` asks for, or whose contexts
+    see motion when ``want``'s do not (or the reverse); ``who`` needs them."""
+    if want.safety and caps.safety is None:
+        raise InvalidArgumentError(
+            f"{where} has no safety priors; {who} needs them: learn it with "
+            f"copi learn --preset {preset_name}"
+        )
+    if caps.motion != want.motion:
+        which = "with" if caps.motion else "without"
+        raise InvalidArgumentError(
+            f"{where} was learnt {which} contexts that see motion; {who} needs "
+            f"{'them' if want.motion else 'none'}: learn it with copi learn --preset "
+            f"{preset_name}"
+        )
+
+
 def check_method_capabilities(method: str, caps: Capabilities, where: str = "the file") -> None:
     """Refuse capabilities that method ``method`` cannot run as it is registered: a learnt
     method needs safety priors, and its contexts see motion exactly when its preset's do
     (run otherwise, its results would be another method's under its name)."""
     spec = method_spec(method)
-    if spec.capabilities is None:
-        return
-    want = CAPABILITY_PRESETS[spec.capabilities]
-    if want.safety and caps.safety is None:
-        raise InvalidArgumentError(
-            f"{where} has no safety priors; {method} needs them: learn it with "
-            f"copi learn --preset {spec.capabilities}"
-        )
-    if caps.motion != want.motion:
-        which = "with" if caps.motion else "without"
-        raise InvalidArgumentError(
-            f"{where} was learnt {which} contexts that see motion; {method} needs "
-            f"{'them' if want.motion else 'none'}: learn it with copi learn --preset "
-            f"{spec.capabilities}"
-        )
+    if spec.capabilities is not None:
+        _check_learnt_like(caps, CAPABILITY_PRESETS[spec.capabilities], method,
+                           spec.capabilities, where)  # fmt: skip
 
 
 def check_preset_capabilities(name: str, caps: Capabilities, where: str = "the file") -> None:
     """Refuse capabilities that were not learnt the way preset ``name`` needs, with one
     line saying how to learn the right ones."""
     want = preset(name).learn
-    if want.safety and caps.safety is None:
-        raise InvalidArgumentError(
-            f"{where} has no safety priors; preset {name} needs them: learn it with "
-            f"copi learn --preset {name}"
-        )
-    if caps.motion != want.motion:
-        which = "with" if caps.motion else "without"
-        raise InvalidArgumentError(
-            f"{where} was learnt {which} contexts that see motion; preset {name} needs "
-            f"{'them' if want.motion else 'none'}: learn it with copi learn --preset {name}"
-        )
+    _check_learnt_like(caps, want, f"preset {name}", name, where)
     have = int(caps.policies.passable.shape[1])
     if have != want.directions:
         raise InvalidArgumentError(

@@ -39,8 +39,9 @@ lint: install
 typecheck: install
 	$(BIN)/mypy
 
+# two processes: the tests are independent (each writes only below its tmp_path)
 pytest: install
-	$(BIN)/pytest
+	$(BIN)/pytest -n 2
 
 test: lint typecheck pytest
 

@@ -22,9 +22,10 @@ from benchmarks._timing import Timing, fmt, report
 from copi.planning import VisibilityGraph, configuration_space, shortest_path
 from copi.planning._grid import GridPlanner
 from copi.planning.movingai import read_map, read_scenarios
-from copi.world import ObstacleSpec, Simulator, WorldParams, random_world
+from copi.world import PACKAGED_MAPS, ObstacleSpec, Simulator, WorldParams, random_world
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+DATA = Path(__file__).resolve().parents[1] / "tests" / "data"
+"""The tests' reference data (Moving AI scenarios; their maps are the ones copi ships)."""
 
 
 def snapshots(n: int) -> list[tuple]:
@@ -117,7 +118,7 @@ def bench_grid() -> None:
             continue
         lines = read_scenarios(scen)
         lines = [lines[i] for i in np.linspace(0, len(lines) - 1, n).astype(int)]
-        planner = GridPlanner(read_map(scen.parent / Path(lines[0].map_name).name).free)
+        planner = GridPlanner(read_map(PACKAGED_MAPS / rel.split(".scen")[0]).free)
         times = []
         for s in lines:
             t0 = time.perf_counter()

@@ -2,7 +2,15 @@
 
 from __future__ import annotations
 
-from copi.world import World
+from pathlib import Path
+
+from copi.world import PACKAGED_MAPS, World
+
+DATA = Path(__file__).resolve().parent / "data"
+"""Reference data nobody on copi wrote (provenance and licences in its README)."""
+
+MAPS = PACKAGED_MAPS
+"""The Moving AI maps copi ships (the ``maps`` family's, and the scenarios' in DATA)."""
 
 SQUARE_ROOM = World([[0, 0], [20, 0], [20, 20], [0, 20]], name="square-room")
 """An empty 20 x 20 room."""

@@ -21,7 +21,6 @@ def main() -> None:
     from copi.experiments.methods import method_spec, parse_methods
     from copi.experiments.pursuit import PursuitConfig, pursue
     from copi.learning import LearnParams, learn
-    from copi.world import movingai_dir
 
     t0 = time.perf_counter()
     print("copi: compiling kernels once (numba), about 30 s", file=sys.stderr, flush=True)
@@ -31,12 +30,7 @@ def main() -> None:
                                  probe_worlds=2, probe_steps=20))  # fmt: skip
         caps_path = d / "capabilities.npz"
         caps.save(caps_path)
-        families = ["star", "polygon", "indoor", "crowd"]
-        try:
-            movingai_dir()
-            families.append("maps")
-        except Exception:  # the maps family needs the Moving AI data beside the checkout
-            pass
+        families = ["star", "polygon", "indoor", "crowd", "maps"]
         methods = [m for m in parse_methods(None) if method_spec(m[0]).available]
         config = BenchmarkConfig(
             methods=tuple(methods), families=tuple(families), episodes=1, seed=0,

@@ -16,6 +16,7 @@ __all__ = [
     "InvalidWorldError",
     "MapFileError",
     "NotFittedError",
+    "ResultsError",
     "WorldFileError",
 ]
 
@@ -62,6 +63,10 @@ class CapabilitiesFormatError(CopiError, ValueError):
 
 class NotFittedError(CopiError, ValueError):
     """An estimator or controller was used before it was fitted or configured."""
+
+
+class ResultsError(CopiError):
+    """A results file is not a copi results store, or holds a different run."""
 
 
 class Interrupted(KeyboardInterrupt):

@@ -18,6 +18,7 @@ import pytest
 
 import copi
 from copi.cli import main
+from tests.common import MAPS
 
 # Subprocesses run this copi (also from another working directory) and print no warnings.
 _HERE = str(Path(copi.__file__).parents[1])
@@ -89,7 +90,9 @@ def test_an_unwritable_output_names_the_user_s_path(tmp_path: Path, capsys) -> N
     target = tmp_path / "w.json"
     target.mkdir()
     code, _, err = run(["world", "sample", "-n", "1", "-o", str(target)], capsys)
-    assert _one_line_error(code, err) == f"copi: error: {target}: Is a directory"
+    assert _one_line_error(code, err) == (
+        f"copi: error: {target} is a directory; expected a file for the world file"
+    )
 
 
 def test_report_of_an_empty_or_foreign_file_changes_nothing(tmp_path: Path, capsys) -> None:
@@ -204,9 +207,7 @@ def test_workers_die_with_a_killed_parent(tmp_path: Path) -> None:
 
 
 def test_movingai_maps_with_diagonally_touching_cells_import(tmp_path: Path, capsys) -> None:
-    data = Path(__file__).resolve().parents[3] / "shared" / "data" / "movingai" / "mapf"
-    if not (data / "random-32-32-20.map").is_file():
-        pytest.skip("shared/data is not beside the project")
+    data = MAPS / "mapf"
     out = tmp_path / "r.json"
     code, text, err = run(
         ["world", "import-movingai", str(data / "random-32-32-20.map"), "-o", str(out)], capsys

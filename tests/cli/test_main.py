@@ -10,6 +10,7 @@ import pytest
 
 from copi.cli import main
 from copi.world import load_worlds
+from tests.common import MAPS
 
 
 def run(args: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, str]:
@@ -91,9 +92,7 @@ def test_the_installed_command_runs_without_traceback(tmp_path: Path) -> None:
 
 
 def test_import_movingai_then_plan(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    data = Path(__file__).resolve().parents[3] / "shared" / "data" / "movingai" / "mapf"
-    if not data.is_dir():
-        pytest.skip("shared/data is not beside the project")
+    data = MAPS / "mapf"
     world_file = tmp_path / "room.json"
     code, out, _ = run(
         ["world", "import-movingai", str(data / "room-32-32-4.map"), "-o", str(world_file)], capsys

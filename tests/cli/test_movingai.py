@@ -8,11 +8,11 @@ from pathlib import Path
 import pytest
 
 from tests.cli.test_main import run
+from tests.common import MAPS
 
-ROOM = Path(__file__).resolve().parents[2].parent / "shared/data/movingai/mapf/room-32-32-4.map"
+ROOM = MAPS / "mapf" / "room-32-32-4.map"
 
 
-@pytest.mark.skipif(not ROOM.exists(), reason="the shared Moving AI data is not beside the project")
 def test_a_moving_ai_map_scaled_for_disc_agents(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -1,11 +1,10 @@
-"""The homicidal chauffeur against Isaacs (../shared/data/homicidal_chauffeur)."""
+"""The homicidal chauffeur against Isaacs (tests/data/homicidal_chauffeur)."""
 
 from __future__ import annotations
 
 import csv
 import math
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -23,14 +22,9 @@ from copi.games import (
     play_open,
     pursuer_step,
 )
+from tests.common import DATA as TEST_DATA
 
-DATA = (
-    Path(__file__).resolve().parents[3]
-    / "shared"
-    / "data"
-    / "homicidal_chauffeur"
-    / "critical_beta.csv"
-)
+DATA = TEST_DATA / "homicidal_chauffeur" / "critical_beta.csv"
 
 
 def _table() -> dict[float, float]:
@@ -41,7 +35,6 @@ def _table() -> dict[float, float]:
         }
 
 
-@pytest.mark.skipif(not DATA.exists(), reason="shared/data is not beside the project")
 def test_critical_beta_matches_the_barrier_trace() -> None:
     for gamma, beta in _table().items():
         assert critical_beta(gamma) == pytest.approx(beta, abs=1e-7)
@@ -55,7 +48,7 @@ STARTS = [
 
 
 def _crit(gamma: float) -> float:
-    return _table()[gamma] if DATA.exists() else critical_beta(gamma)
+    return _table()[gamma]
 
 
 @pytest.mark.parametrize("gamma", [0.3, 0.5, 0.7, 0.9])

@@ -1,4 +1,4 @@
-"""Planners against data nobody here wrote (../shared/data, read in place)."""
+"""Planners against data nobody here wrote (tests/data, provenance in its README)."""
 
 from __future__ import annotations
 
@@ -20,17 +20,15 @@ from copi.planning.movingai import (
     read_map,
     read_scenarios,
 )
+from tests.common import DATA, MAPS
 
-DATA = Path(__file__).resolve().parents[3] / "shared" / "data"
 EPF = DATA / "polygons" / "extremitypathfinder" / "cases.json"
 MOVINGAI = DATA / "movingai"
 SCENARIOS = sorted(MOVINGAI.rglob("*.scen"))
 
-pytestmark = pytest.mark.skipif(not DATA.is_dir(), reason="shared/data is not beside the project")
-
 
 def _epf_environments() -> dict:
-    return json.loads(EPF.read_text())["environments"] if EPF.exists() else {}
+    return json.loads(EPF.read_text())["environments"]
 
 
 def _epf_geometry(env: dict):
@@ -71,8 +69,10 @@ def _tolerance(scen: Path) -> float:
 
 
 def _map_for(scen: Path, name: str) -> Path:
+    """The scenario's map, among the maps copi ships (same folders as the scenarios)."""
     base = Path(name).name
-    for folder in (scen.parent, scen.parent.parent):
+    rel = scen.parent.relative_to(MOVINGAI)
+    for folder in (MAPS / rel, MAPS / rel.parent):
         if (folder / base).exists():
             return folder / base
     raise FileNotFoundError(f"no map {base} for {scen}")
@@ -130,7 +130,7 @@ def test_continuous_is_between_straight_line_and_octile(scen: Path) -> None:
 
 
 def test_a_map_becomes_a_world() -> None:
-    grid = read_map(MOVINGAI / "mapf" / "room-32-32-4.map")
+    grid = read_map(MAPS / "mapf" / "room-32-32-4.map")
     world = map_world(grid)
     assert world.polygon.area == pytest.approx(grid.free.sum(), rel=0.02)
     lines = read_scenarios(MOVINGAI / "mapf" / "room-32-32-4-random-1.scen")
@@ -157,13 +157,11 @@ def _check_mesh(sample: int | None) -> int:
     return len(rows)
 
 
-@pytest.mark.skipif(not MESH.exists(), reason="the Iron Harvest mesh is not in shared/data")
 def test_iron_harvest_mesh_sample() -> None:
     assert _check_mesh(sample=100) == 100
 
 
 @pytest.mark.slow
-@pytest.mark.skipif(not MESH.exists(), reason="the Iron Harvest mesh is not in shared/data")
 def test_iron_harvest_mesh_every_query() -> None:
     assert _check_mesh(sample=None) == 2000
 

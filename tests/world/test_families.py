@@ -11,22 +11,21 @@ from copi.world import (
     CROWD_OBSTACLES,
     FAMILIES,
     MOVINGAI_ENV,
+    PACKAGED_MAPS,
     Simulator,
     World,
+    family_inputs,
     in_sight,
     is_star_shaped,
+    maps_identity,
     movingai_dir,
     sample_start_goal,
     sample_world,
 )
 
-MOVINGAI = Path(__file__).resolve().parents[3] / "shared" / "data" / "movingai"
-HAVE_MAPS = MOVINGAI.is_dir()
-
 
 def _families() -> list:
-    need_maps = pytest.mark.skipif(not HAVE_MAPS, reason="shared/data is not beside the project")
-    return [pytest.param(f, marks=need_maps) if f == "maps" else f for f in FAMILIES]
+    return list(FAMILIES)
 
 
 def _world(family: str, k: int, seed: int = 0) -> tuple[World, np.random.Generator]:
@@ -115,26 +114,61 @@ def test_unknown_family_is_refused() -> None:
 
 def test_maps_without_data_are_refused_clearly(tmp_path: Path) -> None:
     missing = tmp_path / "nowhere"
-    with pytest.raises(InvalidArgumentError, match=r"no Moving AI maps \(\*\.map\) found") as err:
+    with pytest.raises(InvalidArgumentError) as err:
         sample_world("maps", 0, data_dir=missing)
-    assert str(missing) in str(err.value) and MOVINGAI_ENV in str(err.value)
-    with pytest.raises(InvalidArgumentError, match="no Moving AI maps"):
+    assert str(err.value) == (
+        f"{missing} (data_dir) is not a directory; the maps family needs a directory of "
+        ".map files"
+    )
+    with pytest.raises(InvalidArgumentError, match=r"holds no Moving AI map \(\*\.map\)"):
         movingai_dir(tmp_path)  # a directory without maps
 
 
-def test_maps_default_search_names_every_place(
+def test_the_shipped_maps_are_the_default_and_the_variable_overrides_them(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    import copi.world._family_maps as maps
-
+    monkeypatch.delenv(MOVINGAI_ENV, raising=False)
+    monkeypatch.chdir(tmp_path)  # wherever the user runs it from
+    assert movingai_dir() == PACKAGED_MAPS
+    assert len(list(PACKAGED_MAPS.rglob("*.map"))) == 10
     monkeypatch.setenv(MOVINGAI_ENV, str(tmp_path / "env"))
-    monkeypatch.chdir(tmp_path)
-    monkeypatch.setattr(maps, "_REPO_ROOT", tmp_path / "repo")
     with pytest.raises(InvalidArgumentError) as err:
         movingai_dir()
-    message = str(err.value)
-    for place in (tmp_path / "env", tmp_path.parent / "shared", tmp_path / "shared"):
-        assert str(place) in message
+    assert str(err.value) == (
+        f"{tmp_path / 'env'} (${MOVINGAI_ENV}) is not a directory; the maps family needs a "
+        f"directory of .map files (unset ${MOVINGAI_ENV} to use the maps copi ships)"
+    )
+
+
+def test_the_shipped_maps_match_their_provenance() -> None:
+    import csv
+    import hashlib
+
+    with open(PACKAGED_MAPS / "PROVENANCE.tsv", newline="") as fh:
+        rows = {r["local_file"]: r["sha256"] for r in csv.DictReader(fh, delimiter="\t")}
+    found = {p.relative_to(PACKAGED_MAPS).as_posix() for p in PACKAGED_MAPS.rglob("*.map")}
+    assert found == set(rows)
+    for rel, sha in rows.items():
+        assert hashlib.sha256((PACKAGED_MAPS / rel).read_bytes()).hexdigest() == sha, rel
+    assert "Open Data Commons Attribution" in (PACKAGED_MAPS / "README.md").read_text()
+
+
+def test_the_map_set_identity_follows_the_content(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import shutil
+
+    copy = tmp_path / "copy"
+    shutil.copytree(PACKAGED_MAPS, copy)
+    assert maps_identity(copy) == maps_identity()  # where the maps lie does not matter
+    (copy / "mapf" / "empty-32-32.map").unlink()
+    fewer = maps_identity(copy)
+    assert fewer != maps_identity()
+    shutil.copy(PACKAGED_MAPS / "mapf" / "empty-32-32.map", copy / "mapf" / "other.map")
+    assert maps_identity(copy) not in (fewer, maps_identity())  # a renamed map is another set
+    monkeypatch.setenv(MOVINGAI_ENV, str(copy))
+    assert family_inputs("maps") == {"maps_sha": maps_identity(copy)}
+    assert family_inputs("indoor") == {}
 
 
 def _write_map(path: Path, rows: list[str]) -> None:
@@ -162,7 +196,6 @@ def test_maps_from_the_environment_with_diagonal_blocks(
         Simulator.from_world(world, rng)
 
 
-@pytest.mark.skipif(not HAVE_MAPS, reason="shared/data is not beside the project")
 def test_map_obstacles_fit_their_passages() -> None:
     names = set()
     for k in range(40):

@@ -8,6 +8,7 @@ from typing import Annotated, Any
 
 import typer
 
+from copi._files import check_outputs
 from copi.cli._common import _with_progress, app, console, out, progress
 from copi.errors import CopiError
 
@@ -94,6 +95,7 @@ def evaluate_command(
 
     if output is None:
         raise CopiError("evaluate needs -o/--output: the results file to write")
+    check_outputs({"the results store": (output, "results")}, inputs=[capabilities, world_file])
     method = _preset_method(preset, method, capabilities)
     if world_file is not None:
         from copi.world import load_worlds
@@ -226,6 +228,11 @@ def benchmark_command(
                 f"{m} needs navground, which is not installed: pip install 'copi[peers]'"
             )
     n = episodes if episodes is not None else (30 if quick else 1000)
+    check_outputs(
+        {"the benchmark's directory": (output, "directory"),
+         "the results store": (output / "benchmark.sqlite", "results"),
+         "the report": (output / "benchmark.md", "text")},
+    )  # fmt: skip
     if "maps" in fams:
         from copi.world import movingai_dir
 
@@ -323,6 +330,7 @@ def pursuit_command(
         check_preset_capabilities("learnt", Capabilities.load(capabilities), str(capabilities))
         guard = 1.05 if guard is None else guard
     guard = 1.2 if guard is None else guard
+    check_outputs({"the results store": (output, "results")}, inputs=[capabilities])
     config = PursuitConfig(
         capabilities=str(capabilities), evader=evader, dynamic=dynamic, games=games,
         seed=seed, horizon=horizon, guard=guard, contact_ends=not contact_continues,
@@ -380,11 +388,17 @@ def lifelong_command(
     time); writes OUTPUT.md and OUTPUT.png: success and median excess early and late in
     life, paired differences with 95 % intervals, and the goals measured."""
     from copi.experiments.lifelong import LifelongConfig, parse_lifelong_methods, run_lifelong
-    from copi.experiments.lifelong_report import write_lifelong_report
+    from copi.experiments.lifelong_report import lifelong_report_paths, write_lifelong_report
     from copi.world import check_family
 
     check_family(family)
     chosen = parse_lifelong_methods(methods)
+    report_path, figure_path = lifelong_report_paths(output)
+    check_outputs(
+        {"the results store": (output, "results"), "the report": (report_path, "text"),
+         "the report's figure": (figure_path, "png")},
+        inputs=[capabilities],
+    )  # fmt: skip
     if family == "maps":
         from copi.world import movingai_dir
 
@@ -404,7 +418,7 @@ def lifelong_command(
             progress=_resuming(report, output, "lives"),
         ),  # fmt: skip
     )
-    report = write_lifelong_report(output, output.with_suffix(".md"))
+    report = write_lifelong_report(output, report_path)
     out.print(report.read_text(encoding="utf-8").split("![")[0])
     out.print(str(report))
 
@@ -417,10 +431,17 @@ def report_command(
     """Write report.md with the summary table and the paper's Fig. 3 and Fig. 4."""
     from copi.errors import InvalidArgumentError
     from copi.experiments.report import write_report
+    from copi.experiments.store import ResultsStore
 
     for r in results:
         if not r.exists():
             raise InvalidArgumentError(f"{r}: no such results file")
+        ResultsStore(r, readonly=True).close()  # refused before anything is written
+    check_outputs(
+        {"the report's directory": (output, "directory"),
+         "the report": (output / "report.md", "text")},
+        inputs=results,
+    )  # fmt: skip
     path = write_report([str(r) for r in results], output)
     out.print(str(path))
 

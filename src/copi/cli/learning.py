@@ -8,6 +8,7 @@ from typing import Annotated, Any
 import typer
 from rich.table import Table
 
+from copi._files import check_outputs
 from copi.cli._common import app, out, progress
 
 
@@ -96,6 +97,7 @@ def learn_command(
         safety=safety,
         motion=motion,
     )
+    check_outputs({"the capabilities file": (output, "npz")})
     output.parent.mkdir(parents=True, exist_ok=True)
     with progress() as bar:
         tasks: dict[str, object] = {}

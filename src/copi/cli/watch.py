@@ -7,6 +7,7 @@ from typing import Annotated
 
 import typer
 
+from copi._files import check_outputs
 from copi.cli._common import app, compiling_notice, out
 
 
@@ -55,6 +56,10 @@ def watch_command(
 
     if output.suffix.lower() not in FORMATS:
         raise InvalidArgumentError(f"-o must end in {', '.join(FORMATS)}; got {output.name!r}")
+    check_outputs(
+        {"the animation": (output, output.suffix.lower().lstrip("."))},
+        inputs=[capabilities, world_file],
+    )
     caps = Capabilities.load(capabilities) if capabilities is not None else None
     if method is None:
         if caps is None:

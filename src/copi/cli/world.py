@@ -9,6 +9,7 @@ import numpy as np
 import typer
 from rich.table import Table
 
+from copi._files import check_outputs
 from copi.cli._common import app, out, progress, safe_name, world_app
 from copi.errors import CopiError
 
@@ -30,6 +31,7 @@ def world_sample(
     for k in range(count):
         w = random_world(np.random.default_rng([seed, k]))
         worlds.append(w.replace(name=f"{k:03d}-{len(w.boundary)}gon"))
+    check_outputs({"the world file": (output, "json")})
     output.parent.mkdir(parents=True, exist_ok=True)
     save_worlds(worlds, output)
     table = Table("world", "sides", "area", "width", "height", title=str(output))
@@ -59,6 +61,13 @@ def world_show(
     from copi.world import load_worlds
 
     worlds = load_worlds(world_file)
+    pictures = {
+        f"the picture of {w.name}": (output / f"{safe_name(w.name)}{suffix}", suffix[1:])
+        for w in worlds
+        for suffix in ([".png", ".gif"] if gif else [".png"])
+    }
+    check_outputs({**pictures, "the overview": (output / "worlds.png", "png")},
+                  inputs=[world_file])  # fmt: skip
     output.mkdir(parents=True, exist_ok=True)
     written = []
     with progress() as bar:
@@ -108,6 +117,7 @@ def world_import_movingai(
     from copi.world import save_worlds
     from copi.world._family_maps import scaled_map_world
 
+    check_outputs({"the world file": (output, "json")}, inputs=[map_file])
     grid = read_map(map_file)
     if passage is not None:
         if near is not None:
@@ -155,6 +165,8 @@ def plan_command(
     from copi.planning import shortest_path
     from copi.world import load_worlds
 
+    if output is not None:
+        check_outputs({"the picture": (output, "png")}, inputs=[world_file])
     worlds = load_worlds(world_file)
     if index >= len(worlds):
         raise InvalidArgumentError(f"--index {index}: {world_file} holds {len(worlds)} world(s)")
@@ -168,7 +180,10 @@ def plan_command(
         )
     plan = shortest_path(world, s, g, radius=radius)
     if not plan.found:
-        out.print(f"no path from {tuple(s)} to {tuple(g)} in {world.name!r} for radius {radius:g}")
+        out.print(
+            f"no path from ({s[0]:g}, {s[1]:g}) to ({g[0]:g}, {g[1]:g}) in {world.name!r} "
+            f"for radius {radius:g}"
+        )
         raise typer.Exit(1)
     assert plan.path is not None
     out.print(f"length {plan.length:.6f} ({len(plan.path) - 1} segments)")

@@ -12,7 +12,7 @@ from concurrent.futures import as_completed
 from contextlib import AbstractContextManager, contextmanager
 from typing import Any
 
-from copi.errors import Interrupted
+from copi.errors import Interrupted, ResultsError
 from copi.learning import Capabilities
 
 __all__ = ["RunIdentity", "execute", "run_into_store", "stops_cleanly"]
@@ -71,6 +71,19 @@ def file_sha(path: str | os.PathLike[str]) -> str:
     return h.hexdigest()
 
 
+def check_family_inputs(family: str, expected: dict[str, str]) -> None:
+    """Refuse to draw an episode of ``family`` when the data it draws from is no longer
+    what the run recorded (e.g. ``$COPI_MOVINGAI`` pointed elsewhere on a worker)."""
+    from copi.world import family_inputs
+
+    if expected and family_inputs(family) != expected:
+        raise ResultsError(
+            f"the data the {family} family draws from changed during the run "
+            f"({', '.join(sorted(expected))} differs); rerun the same command to be told "
+            "how it differs from the stored run"
+        )
+
+
 def code_version() -> str:
     """The version of copi that computes a run's results (part of every run's identity:
     results from another version are another run)."""
@@ -91,13 +104,17 @@ class RunIdentity:
     def resolved(self) -> Any:
         """The config with its input files' content hashes (checks the capabilities
         load)."""
-        changes: dict[str, str] = {}
+        changes: dict[str, Any] = {}
         if self.capabilities is not None:
             Capabilities.load(self.capabilities)
             changes["capabilities_sha"] = file_sha(self.capabilities)
         world_file = getattr(self, "world_file", None)
         if world_file is not None:
             changes["world_file_sha"] = file_sha(world_file)
+        elif hasattr(self, "inputs") and hasattr(self, "family"):
+            from copi.world import family_inputs
+
+            changes["inputs"] = family_inputs(getattr(self, "family"))  # noqa: B009
         return dataclasses.replace(self, **changes)  # type: ignore[type-var]
 
     def identity(self) -> dict[str, Any]:
@@ -106,6 +123,7 @@ class RunIdentity:
         d = dataclasses.asdict(self)  # type: ignore[call-overload]
         d.pop("capabilities")
         d.pop("world_file", None)
+        d.update(d.pop("inputs", None) or {})  # a family's data, where it draws from any
         d["code"] = code_version()
         return d
 

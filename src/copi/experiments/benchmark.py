@@ -23,7 +23,14 @@ from typing import Any
 
 from copi.errors import InvalidArgumentError, InvalidWorldError
 from copi.experiments._episode import optimal_to_goal, run_agent
-from copi.experiments._runs import Tally, code_version, execute, file_sha, stops_cleanly
+from copi.experiments._runs import (
+    Tally,
+    check_family_inputs,
+    code_version,
+    execute,
+    file_sha,
+    stops_cleanly,
+)
 from copi.experiments.methods import (
     CAPABILITY_PRESETS,
     check_method_capabilities,
@@ -42,7 +49,7 @@ from copi.experiments.navigation import (
 from copi.geometry._arrays import positive_int
 from copi.learning import Capabilities, LearnParams
 from copi.online import check_strategy
-from copi.world import check_family
+from copi.world import check_family, family_inputs
 
 __all__ = [
     "BENCHMARK_FAMILIES",
@@ -84,6 +91,9 @@ class BenchmarkConfig:
     capabilities: dict[str, str] = field(default_factory=dict)
     """Capabilities file per preset ("faithful", "extended") for copi's methods."""
     capabilities_sha: dict[str, str] = field(default_factory=dict)
+    inputs: dict[str, dict[str, str]] = field(default_factory=dict)
+    """Per family, the content hashes of the data it draws from
+    (:func:`copi.world.family_inputs`; filled in by :meth:`resolved`)."""
 
     def __post_init__(self) -> None:
         positive_int(self.episodes, "episodes")
@@ -108,7 +118,8 @@ class BenchmarkConfig:
                 if method_spec(m).capabilities == preset:
                     check_method_capabilities(m, caps, path)
             shas[preset] = file_sha(path)
-        return dataclasses.replace(self, capabilities_sha=shas)
+        inputs = {f: family_inputs(f) for f in self.families}
+        return dataclasses.replace(self, capabilities_sha=shas, inputs=inputs)
 
     def identity(self, family: str, method: str, sensing: str) -> dict[str, Any]:
         """What makes one (family, method, level) run the same run: not the number of
@@ -124,6 +135,7 @@ class BenchmarkConfig:
             "params": spec.params,
             "max_steps": "min(1000, ceil(3 optimal + 100))",
             "code": code_version(),
+            **self.inputs.get(family, {}),
         }
         if sensing == "sensor" and self.sensor_strategy != "greedy":
             ident["strategy"] = self.sensor_strategy
@@ -140,6 +152,7 @@ def run_item(
     config: BenchmarkConfig, family: str, k: int, todo: list[tuple[str, str, str]]
 ) -> list[tuple[str, str, EpisodeResult]]:
     """Episode k of ``family`` for each (run_id, method, level) in ``todo``."""
+    check_family_inputs(family, config.inputs.get(family, {}))
     try:
         base = draw_episode(family, k, config.seed, agent_radius=config.agent_radius)
     except InvalidWorldError as exc:  # recorded, so that the run goes on

@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from copi._files import save_figure, write_text
 from copi.experiments.figures import _figure
 from copi.experiments.methods import METHODS
 from copi.experiments.store import ResultsStore
@@ -185,7 +186,7 @@ def _figure_success_excess(
         fig.subplots_adjust(bottom=0.1 + 0.03 * math.ceil(len(seen) / 4), hspace=0.45,
                             wspace=0.3)  # fmt: skip
     target = out / "benchmark_success_excess.png"
-    fig.savefig(target)
+    save_figure(fig, target)
     return target
 
 
@@ -296,5 +297,5 @@ def write_benchmark_report(
             p = ", ".join(f"{k} = {v}" for k, v in params.get(name, spec.params).items()) or "—"
             lines.append(f"| {name} | {spec.sensing} | {spec.summary} | {p} |")
     report = out / "benchmark.md"
-    report.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    write_text(report, "\n".join(lines) + "\n")
     return report

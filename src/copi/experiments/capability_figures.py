@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from copi._files import save_figure
 from copi.experiments.figures import _figure
 from copi.geometry import ring_angles
 from copi.learning import Capabilities, Operator, PermutationAutomaton, local_world
@@ -79,7 +80,7 @@ def save_context_map(caps: Capabilities, out: Path) -> Path:
     ax.set_ylabel("second principal axis")
     fig.tight_layout()
     target = out / "fig1_context_map.png"
-    fig.savefig(target)
+    save_figure(fig, target)
     return target
 
 
@@ -107,7 +108,7 @@ def save_skeleton_curve(caps: Capabilities, out: Path) -> Path:
     ax.legend(loc="upper left", fontsize=8)
     fig.tight_layout()
     target = out / "fig1_skeleton_curve.png"
-    fig.savefig(target)
+    save_figure(fig, target)
     return target
 
 
@@ -154,7 +155,7 @@ def save_landmarks(caps: Capabilities, out: Path) -> Path:
     )
     fig.tight_layout()
     target = out / "fig1_landmarks.png"
-    fig.savefig(target)
+    save_figure(fig, target)
     return target
 
 
@@ -197,7 +198,7 @@ def save_policies(caps: Capabilities, out: Path) -> Path:
     fig.suptitle(f"{pol.n_policies} local policies ({pol.learner}) on {n} templates", fontsize=8)
     fig.tight_layout()
     target = out / "fig1_policies.png"
-    fig.savefig(target)
+    save_figure(fig, target)
     return target
 
 
@@ -272,7 +273,7 @@ def save_automaton(out: Path) -> Path:
     )
     fig.tight_layout()
     target = out / "fig2_automaton.png"
-    fig.savefig(target)
+    save_figure(fig, target)
     return target
 
 

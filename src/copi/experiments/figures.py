@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from copi._files import atomic_path, save_figure
 from copi.world import Simulator, World, draw_simulator, draw_world
 
 __all__ = ["save_episode_gif", "save_episode_png", "save_overview_png", "save_plan_png"]
@@ -36,7 +37,7 @@ def save_episode_png(sim: Simulator, path: str | os.PathLike[str]) -> Path:
     draw_simulator(ax, sim, title=_title(sim))
     fig.tight_layout()
     out = Path(path)
-    fig.savefig(out)
+    save_figure(fig, out)
     return out
 
 
@@ -52,7 +53,7 @@ def save_plan_png(
     ax.plot(pts[:, 0], pts[:, 1], ".", color="#d62728", ms=4, zorder=6)
     fig.tight_layout()
     target = Path(out)
-    fig.savefig(target)
+    save_figure(fig, target)
     return target
 
 
@@ -73,7 +74,7 @@ def save_overview_png(sims: Sequence[Simulator], path: str | os.PathLike[str]) -
         draw_simulator(ax, sim, rays=False, title=_title(sim))
     fig.tight_layout()
     out = Path(path)
-    fig.savefig(out)
+    save_figure(fig, out)
     return out
 
 
@@ -129,5 +130,6 @@ def save_episode_gif(
     frames = [*range(0, len(path_arr) - 1, stride), len(path_arr) - 1]
     anim = FuncAnimation(fig, frame, frames=frames, blit=False)
     out = Path(path)
-    anim.save(out, writer=PillowWriter(fps=fps))
+    with atomic_path(out, "gif") as tmp:
+        anim.save(tmp, writer=PillowWriter(fps=fps))
     return out

@@ -35,12 +35,19 @@ import numpy as np
 
 from copi.errors import InvalidArgumentError, InvalidWorldError
 from copi.experiments._episode import optimal_to_goal, run_agent
-from copi.experiments._runs import Tally, code_version, execute, file_sha, stops_cleanly
+from copi.experiments._runs import (
+    Tally,
+    check_family_inputs,
+    code_version,
+    execute,
+    file_sha,
+    stops_cleanly,
+)
 from copi.experiments.benchmark import benchmark_max_steps
 from copi.experiments.methods import make_agent, method_spec
 from copi.experiments.navigation import _capabilities
 from copi.geometry._arrays import positive_int
-from copi.world import RangeSensor, Simulator, check_family, sample_world
+from copi.world import RangeSensor, Simulator, check_family, family_inputs, sample_world
 from copi.world._generate import place_obstacles, sample_start_goal
 
 __all__ = [
@@ -128,6 +135,9 @@ class LifelongConfig:
     """A directory of causal maps saved by an earlier run (``maps``): each causal
     method's life starts from its map of that world (a life resumed)."""
     from_maps_sha: str = ""
+    inputs: dict[str, str] = dataclasses.field(default_factory=dict)
+    """Content hashes of the data the family draws from (:func:`copi.world.family_inputs`,
+    filled in by :meth:`resolved`)."""
 
     def __post_init__(self) -> None:
         check_family(self.family)
@@ -145,7 +155,7 @@ class LifelongConfig:
         """With the capabilities file's content hash (checks it loads and has what the
         learnt preset needs)."""
         if self.capabilities is None:
-            return self
+            return dataclasses.replace(self, inputs=family_inputs(self.family))
         from copi.experiments.methods import check_preset_capabilities
         from copi.learning import Capabilities
 
@@ -156,7 +166,9 @@ class LifelongConfig:
             raise InvalidArgumentError(
                 f"the capabilities were learnt for {caps.n_rays} rays; the sensor has {rays}"
             )
-        done = dataclasses.replace(self, capabilities_sha=file_sha(self.capabilities))
+        done = dataclasses.replace(
+            self, capabilities_sha=file_sha(self.capabilities), inputs=family_inputs(self.family)
+        )
         if self.from_maps is None:
             return done
         if self.maps is not None and Path(self.maps).resolve() == Path(self.from_maps).resolve():
@@ -198,7 +210,7 @@ class LifelongConfig:
             "seed": self.seed, "method": method, "base": m.method, "sensing": m.sensing,
             "strategy": m.strategy, "continual": m.continual, "params": spec.params,
             "agent_radius": self.agent_radius, "code": code_version(),
-            "max_steps": "min(1000, ceil(3 optimal + 100))",
+            "max_steps": "min(1000, ceil(3 optimal + 100))", **self.inputs,
         }  # fmt: skip
         if spec.capabilities is not None:
             ident["capabilities_sha"] = self.capabilities_sha
@@ -337,6 +349,7 @@ def run_life(
 ) -> list[tuple[str, str, list[LifeResult]]]:
     """World ``life``: its tasks drawn and their optima computed once, then the life of
     each (run_id, method) in ``todo``."""
+    check_family_inputs(config.family, config.inputs)
     try:
         sims = draw_life(config.family, life, config.seed, config.tasks,
                          agent_radius=config.agent_radius)  # fmt: skip

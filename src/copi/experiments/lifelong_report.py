@@ -13,12 +13,18 @@ from typing import Any
 
 import numpy as np
 
+from copi._files import save_figure, write_text
 from copi.experiments.benchmark_report import PairedDifference
 from copi.experiments.figures import _figure
 from copi.experiments.lifelong import LIFELONG_METHODS
 from copi.experiments.store import ResultsStore
 
-__all__ = ["lifelong_blocks", "lives_difference", "write_lifelong_report"]
+__all__ = [
+    "lifelong_blocks",
+    "lifelong_report_paths",
+    "lives_difference",
+    "write_lifelong_report",
+]
 
 CAUSAL = "copi-learnt+causal"
 """The method every other row is paired against."""
@@ -137,8 +143,16 @@ def _figure_lifelong(by_method: dict[str, list[dict[str, Any]]], tasks: int, out
     ax_u.legend(fontsize=7, frameon=False)
     fig.tight_layout()
     target = out
-    fig.savefig(target)
+    save_figure(fig, target)
     return target
+
+
+def lifelong_report_paths(results: str | os.PathLike[str]) -> tuple[Path, Path]:
+    """Where ``copi lifelong -o RESULTS`` writes its report and figure: RESULTS with the
+    suffix ``.md`` and ``.png`` (check them with :func:`copi._files.check_outputs`: a
+    store named ``x.md`` would be its own report)."""
+    p = Path(results)
+    return p.with_suffix(".md"), p.with_suffix(".png")
 
 
 def write_lifelong_report(
@@ -151,8 +165,7 @@ def write_lifelong_report(
         runs = {r["run_id"]: r for r in store.runs() if r["experiment"] == "lifelong"}
     target = Path(markdown)
     if not rows:
-        target.write_text("# Experiment 3 — lifelong\n\nNo lifelong results yet.\n",
-                          encoding="utf-8")  # fmt: skip
+        write_text(target, "# Experiment 3 — lifelong\n\nNo lifelong results yet.\n")
         return target
     # One section per (family, seed, tasks): only runs of the same lives are compared.
     groups: dict[tuple[str, int, int], list[str]] = {}
@@ -169,7 +182,7 @@ def write_lifelong_report(
             f"{target.stem}-{i + 1}.png"
         )
         lines += _section(group_rows, {rid: runs[rid] for rid in rids}, fig)
-    target.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    write_text(target, "\n".join(lines) + "\n")
     return target
 
 

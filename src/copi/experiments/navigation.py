@@ -14,7 +14,7 @@ import numpy as np
 
 from copi.errors import InvalidArgumentError, InvalidWorldError, WorldFileError
 from copi.experiments._episode import EpisodeOutcome, optimal_to_goal, run_agent
-from copi.experiments._runs import RunIdentity, file_sha, run_into_store
+from copi.experiments._runs import RunIdentity, check_family_inputs, file_sha, run_into_store
 from copi.experiments.methods import check_method_capabilities, make_agent, method_spec
 from copi.geometry._arrays import positive_int
 from copi.learning import Capabilities
@@ -78,6 +78,9 @@ class NavigationConfig(RunIdentity):
     """Content hash of the capabilities file (filled in by :meth:`resolved`)."""
     world_file_sha: str = field(default="", compare=False)
     """Content hash of the world file (filled in by :meth:`resolved`)."""
+    inputs: dict[str, str] = field(default_factory=dict, compare=False)
+    """Content hashes of the data the family draws from (:func:`copi.world.family_inputs`,
+    filled in by :meth:`resolved`)."""
 
     def __post_init__(self) -> None:
         for name in ("worlds", "max_steps"):
@@ -282,6 +285,8 @@ def run_episode(config: NavigationConfig, k: int) -> EpisodeResult:
     """Episode k of a run: draw the task, measure the optimum on the frozen snapshot,
     then run the method online. Depends only on (config, k)."""
     spec = method_spec(config.method)
+    if config.world_file is None:
+        check_family_inputs(config.family, config.inputs)
     caps = None
     n_rays, max_range = 32, 10.0
     if spec.capabilities is not None:

@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from copi._files import save_figure, write_text
 from copi.experiments.figures import _figure
 from copi.experiments.store import ResultsStore
 from copi.world import World, draw_world
@@ -152,7 +153,7 @@ def _fig3(trajectories: list[dict[str, Any]], out: Path, method: str) -> Path | 
     )
     fig.tight_layout()
     target = out / f"fig3_{_slug(method)}.png"
-    fig.savefig(target)
+    save_figure(fig, target)
     return target
 
 
@@ -200,7 +201,7 @@ def _fig4(excess: dict[str, np.ndarray], out: Path) -> Path:
         ax.text(0.5, 0.5, "no successful episode", transform=ax.transAxes, ha="center")
     fig.tight_layout()
     target = out / "fig4_excess.png"
-    fig.savefig(target)
+    save_figure(fig, target)
     return target
 
 
@@ -267,7 +268,7 @@ def _fig5(runs: dict[str, list[dict[str, Any]]], out: Path) -> Path | None:
     )
     fig.tight_layout()
     target = out / "fig5_pursuit.png"
-    fig.savefig(target)
+    save_figure(fig, target)
     return target
 
 
@@ -378,7 +379,7 @@ def write_report(results: list[str | os.PathLike[str]], directory: str | os.Path
     for part in lifelong:
         lines += ["", part.read_text(encoding="utf-8")]
     report = out / "report.md"
-    report.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    write_text(report, "\n".join(lines) + "\n")
     return report
 
 

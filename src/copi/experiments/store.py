@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import quote
 
-from copi.errors import CopiError
+from copi.errors import ResultsError
 
 __all__ = ["ResultsError", "ResultsStore"]
 
@@ -137,10 +137,6 @@ _ADDED_EPISODE_COLUMNS = {
     "family": "TEXT", "sensing": "TEXT", "outcome": "TEXT", "time_to_goal": "REAL",
     "min_clearance": "REAL", "smoothness": "REAL", "reason": "TEXT",
 }  # fmt: skip
-
-
-class ResultsError(CopiError):
-    """A results file is not a copi results store, or holds a different run."""
 
 
 APPLICATION_ID = 0x636F7069  # "copi": SQLite's header field for the file's owner
@@ -512,6 +508,7 @@ _INPUTS = {
     "capabilities_sha": "the capabilities file's content",
     "world_file_sha": "the world file's content",
     "code": "copi's version",
+    "maps_sha": "the maps family's map set",
 }
 
 

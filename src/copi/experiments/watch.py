@@ -3,6 +3,7 @@ moving obstacles, and what the method decided there (``copi watch``)."""
 
 from __future__ import annotations
 
+import errno
 import math
 import os
 import shutil
@@ -14,6 +15,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from copi._files import atomic_path
 from copi.errors import InvalidArgumentError
 from copi.experiments._episode import EpisodeOutcome, run_agent
 from copi.experiments.methods import make_agent, method_spec
@@ -275,19 +277,28 @@ def save_watch(
         sim = watched.sim
         img = _frame(watched, len(sim.path) - 1, np.asarray(sim.path), np.asarray(sim.traces),
                      size)  # fmt: skip
-        Image.fromarray(img).save(target)
+        with atomic_path(target, "png") as tmp:
+            Image.fromarray(img).save(tmp, format="PNG")
         return target
     pictures = frames(watched, size=size)
     if suffix == ".gif":
         first, *rest = (Image.fromarray(p) for p in pictures)
         durations = [round(1000 / fps)] * (len(pictures) - 1) + [2000]  # hold the outcome
-        first.save(target, save_all=True, append_images=rest, duration=durations, loop=0)
+        with atomic_path(target, "gif") as tmp:
+            first.save(tmp, format="GIF", save_all=True, append_images=rest,
+                       duration=durations, loop=0)  # fmt: skip
         return target
     h, w = pictures[0].shape[:2]
     cmd = [
         "ffmpeg", "-y", "-loglevel", "error", "-f", "rawvideo", "-pix_fmt", "rgb24",
         "-s", f"{w}x{h}", "-r", str(fps), "-i", "-", "-pix_fmt", "yuv420p",
-        "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", str(target),
+        "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-f", "mp4",
     ]  # fmt: skip
-    subprocess.run(cmd, input=b"".join(p.tobytes() for p in pictures), check=True)
+    with atomic_path(target, "mp4") as tmp:
+        done = subprocess.run([*cmd, str(tmp)], input=b"".join(p.tobytes() for p in pictures),
+                              capture_output=True)  # fmt: skip
+        if done.returncode != 0:
+            why = done.stderr.decode(errors="replace").strip().splitlines()
+            raise OSError(errno.EIO, f"ffmpeg failed ({why[-1] if why else done.returncode})",
+                          str(target))  # fmt: skip
     return target

@@ -11,9 +11,23 @@ from __future__ import annotations
 
 from copi.world._agents import RandomWalk
 from copi.world._env import NavigationEnv
-from copi.world._families import CROWD_OBSTACLES, FAMILIES, check_family, in_sight, sample_world
+from copi.world._families import (
+    CROWD_OBSTACLES,
+    FAMILIES,
+    check_family,
+    family_inputs,
+    in_sight,
+    sample_world,
+)
 from copi.world._family_indoor import IndoorParams, indoor_world
-from copi.world._family_maps import MOVINGAI_ENV, MapsParams, map_window_world, movingai_dir
+from copi.world._family_maps import (
+    MOVINGAI_ENV,
+    PACKAGED_MAPS,
+    MapsParams,
+    map_window_world,
+    maps_identity,
+    movingai_dir,
+)
 from copi.world._family_polygon import PolygonParams, is_star_shaped, polygon_world
 from copi.world._generate import (
     WorldParams,
@@ -36,6 +50,7 @@ __all__ = [
     "MapsParams",
     "NavigationEnv",
     "ObstacleSpec",
+    "PACKAGED_MAPS",
     "PolygonParams",
     "RandomWalk",
     "RangeSensor",
@@ -47,11 +62,13 @@ __all__ = [
     "check_task",
     "draw_simulator",
     "draw_world",
+    "family_inputs",
     "in_sight",
     "indoor_world",
     "is_star_shaped",
     "load_worlds",
     "map_window_world",
+    "maps_identity",
     "movingai_dir",
     "place_obstacles",
     "polygon_world",

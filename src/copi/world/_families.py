@@ -12,12 +12,19 @@ from copi._rng import Seed, as_generator
 from copi.errors import InvalidArgumentError
 from copi.geometry._arrays import as_vector
 from copi.world._family_indoor import indoor_world
-from copi.world._family_maps import MapsParams, map_window_world
+from copi.world._family_maps import MapsParams, map_window_world, maps_identity
 from copi.world._family_polygon import polygon_world
 from copi.world._generate import random_world
 from copi.world._world import ObstacleSpec, World
 
-__all__ = ["CROWD_OBSTACLES", "FAMILIES", "check_family", "in_sight", "sample_world"]
+__all__ = [
+    "CROWD_OBSTACLES",
+    "FAMILIES",
+    "check_family",
+    "family_inputs",
+    "in_sight",
+    "sample_world",
+]
 
 FAMILIES = ("crowd", "indoor", "maps", "polygon", "star")
 """Names of the world families, sorted (see :func:`sample_world`)."""
@@ -31,6 +38,21 @@ def check_family(family: str) -> str:
     if family not in FAMILIES:
         raise InvalidArgumentError(f"family must be one of {', '.join(FAMILIES)}; got {family!r}")
     return family
+
+
+def family_inputs(family: str) -> dict[str, str]:
+    """The content hashes of the data a family draws its worlds from, by name: part of
+    the identity of every run of the family, so that worlds drawn from other data never
+    resume into it. ``maps``: ``{"maps_sha": maps_identity()}`` (the map set of
+    :func:`movingai_dir`); the generated families draw from nothing but the seed.
+
+    Examples
+    --------
+    >>> family_inputs("star"), sorted(family_inputs("maps"))
+    ({}, ['maps_sha'])
+    """
+    check_family(family)
+    return {"maps_sha": maps_identity()} if family == "maps" else {}
 
 
 def sample_world(

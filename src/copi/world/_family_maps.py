@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+import hashlib
 import math
 import os
 from dataclasses import dataclass
@@ -18,46 +19,88 @@ from copi.errors import InvalidArgumentError, InvalidWorldError
 from copi.world._gridmap import free_geometry, read_map, without_pinches
 from copi.world._world import ObstacleSpec, World
 
-__all__ = ["MOVINGAI_ENV", "MapsParams", "map_window_world", "movingai_dir"]
+__all__ = [
+    "MOVINGAI_ENV",
+    "PACKAGED_MAPS",
+    "MapsParams",
+    "map_window_world",
+    "maps_identity",
+    "movingai_dir",
+]
 
 MOVINGAI_ENV = "COPI_MOVINGAI"
-"""Environment variable naming the directory of Moving AI maps."""
+"""Environment variable naming another directory of Moving AI maps."""
 
-_REPO_ROOT = Path(__file__).resolve().parents[3]
+PACKAGED_MAPS = Path(__file__).resolve().parents[1] / "data" / "movingai"
+"""The ten Moving AI maps copi ships (their provenance and licence beside them)."""
 
 
 def movingai_dir(data_dir: str | os.PathLike[str] | None = None) -> Path:
-    """The directory of Moving AI ``.map`` files (searched recursively).
+    """The directory of Moving AI ``.map`` files the ``maps`` family draws from (searched
+    recursively).
 
-    ``data_dir`` when given; else ``$COPI_MOVINGAI``; else ``../shared/data/movingai``
-    beside the current directory; else the same beside the repository this package
-    comes from. The first that holds a ``.map`` file wins.
+    ``data_dir`` when given; else ``$COPI_MOVINGAI`` when set; else the maps shipped with
+    copi (:data:`PACKAGED_MAPS`: ten maps of the Moving AI benchmarks, see the README
+    beside them). A directory given (argument or variable) must hold a ``.map`` file.
 
     Raises
     ------
     InvalidArgumentError
-        When none does, naming every place looked at.
+        When the directory given holds no map, naming it and where it came from.
+
+    Examples
+    --------
+    >>> movingai_dir() == PACKAGED_MAPS  # with $COPI_MOVINGAI unset
+    True
     """
     if data_dir is not None:
-        candidates = [("data_dir", Path(data_dir))]
+        path, why = Path(data_dir), "data_dir"
+    elif os.environ.get(MOVINGAI_ENV):
+        path, why = Path(os.environ[MOVINGAI_ENV]), f"${MOVINGAI_ENV}"
     else:
-        env = os.environ.get(MOVINGAI_ENV)
-        candidates = [(f"${MOVINGAI_ENV}", Path(env))] if env else []
-        candidates += [
-            ("beside the current directory", Path.cwd().parent / "shared" / "data" / "movingai"),
-            ("beside the repository", _REPO_ROOT.parent / "shared" / "data" / "movingai"),
-        ]
-    for _, path in candidates:
-        if path.is_dir() and next(path.rglob("*.map"), None) is not None:
-            return path
-    looked = "; ".join(f"{path} ({why})" for why, path in candidates)
-    unset = ""
-    if data_dir is None and not os.environ.get(MOVINGAI_ENV):
-        unset = f" (${MOVINGAI_ENV} unset)"
+        path, why = PACKAGED_MAPS, "the maps copi ships"
+    if path.is_dir() and next(path.rglob("*.map"), None) is not None:
+        return path
+    what = "is not a directory" if not path.is_dir() else "holds no Moving AI map (*.map)"
     raise InvalidArgumentError(
-        f"no Moving AI maps (*.map) found; looked in {looked}{unset}; "
-        f"pass data_dir or set ${MOVINGAI_ENV}"
+        f"{path} ({why}) {what}; the maps family needs a directory of .map files"
+        + (f" (unset ${MOVINGAI_ENV} to use the maps copi ships)" if why != "data_dir" else "")
     )
+
+
+def maps_identity(data_dir: str | os.PathLike[str] | None = None) -> str:
+    """The content hash of the map set the ``maps`` family draws from: every ``.map``
+    file's path relative to :func:`movingai_dir` and its SHA-256, in the order the family
+    draws them. A run of the ``maps`` family records it, so that results drawn from
+    another map set never resume into it.
+
+    Examples
+    --------
+    >>> len(maps_identity()), maps_identity() == maps_identity(PACKAGED_MAPS)
+    (64, True)
+    """
+    root = movingai_dir(data_dir)
+    return _identity(str(root), tuple(_stamps(root)))
+
+
+def _stamps(root: Path) -> list[tuple[str, int, int]]:
+    """(path, size, mtime) of each map: a changed file misses the cache below."""
+    out = []
+    for p in _map_files(str(root)):
+        st = os.stat(p)
+        out.append((p, st.st_size, st.st_mtime_ns))
+    return out
+
+
+@functools.lru_cache(maxsize=8)
+def _identity(root: str, stamps: tuple[tuple[str, int, int], ...]) -> str:
+    h = hashlib.sha256()
+    for path, _, _ in stamps:
+        rel = Path(path).relative_to(root).as_posix()
+        h.update(rel.encode() + b"\0")
+        with open(path, "rb") as fh:
+            h.update(hashlib.sha256(fh.read()).digest())
+    return h.hexdigest()
 
 
 @dataclass(frozen=True)
@@ -118,8 +161,8 @@ def _load(path: str) -> _Map:
     return _Map(Path(path).stem, free_geometry(grid), grid.height, grid.width, passage)
 
 
-@functools.lru_cache(maxsize=8)
 def _map_files(directory: str) -> tuple[str, ...]:
+    # not cached: the set may change between calls (and listing it costs ~0.1 ms)
     return tuple(sorted(str(p) for p in Path(directory).rglob("*.map")))
 
 

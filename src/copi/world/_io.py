@@ -101,7 +101,7 @@ def save_worlds(worlds: World | Iterable[World], path: str | os.PathLike[str]) -
     if p.parent and not p.parent.exists():
         raise WorldFileError(f"{p}: directory {p.parent} does not exist")
     text = _compact([w.to_dict() for w in items]) + "\n"
-    atomic_write(p, lambda fh: fh.write(text.encode("utf-8")))
+    atomic_write(p, lambda fh: fh.write(text.encode("utf-8")), "json")
 
 
 def _compact(value: Any, depth: int = 0, width: int = 96) -> str:

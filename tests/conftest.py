@@ -1,0 +1,27 @@
+"""Fixtures shared across the test packages: small capabilities files, learnt once per
+test process."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from copi.learning import LearnParams, learn
+
+
+@pytest.fixture(scope="session")
+def learnt_caps(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A small capabilities file of the learnt preset (16 directions, safety priors)."""
+    path = tmp_path_factory.mktemp("caps") / "capabilities-learnt.npz"
+    learn(LearnParams(worlds=6, steps=150, directions=16, safety=True, probe_worlds=6,
+                      probe_steps=60, seed=1)).save(path)  # fmt: skip
+    return path
+
+
+@pytest.fixture(scope="session")
+def faithful_caps(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A small capabilities file of the faithful preset (4 directions)."""
+    path = tmp_path_factory.mktemp("caps") / "capabilities-faithful.npz"
+    learn(LearnParams(worlds=6, steps=150, directions=4, seed=1)).save(path)
+    return path

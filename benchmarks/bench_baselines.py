@@ -18,27 +18,29 @@ from rich.console import Console
 from rich.table import Table
 
 from benchmarks._timing import Timing, fmt
-from copi.experiments._episode import optimal_to_goal, run_agent
+from copi.experiments._episode import optimal_to_goal, run_episode
 from copi.experiments.benchmark import benchmark_max_steps, ensure_capabilities
-from copi.experiments.methods import METHODS, make_agent
+from copi.experiments.methods import make_agent, method_names, method_spec
 from copi.experiments.navigation import draw_episode
 from copi.learning import Capabilities
 
 
 def main() -> bool:
-    caps_paths = ensure_capabilities(Path(tempfile.mkdtemp()), {"faithful", "extended"})
+    caps_paths = ensure_capabilities(Path(tempfile.mkdtemp()), {"faithful", "extended",
+                                                                 "learnt"})  # fmt: skip
     caps = {k: Capabilities.load(v) for k, v in caps_paths.items()}
     episodes = [draw_episode("polygon", k, 3) for k in range(20)]
     limits = [benchmark_max_steps(optimal_to_goal(sim)) for sim in episodes]
     rows = []
-    for name, spec in METHODS.items():
-        if not spec.available:
+    for name in method_names():
+        spec = method_spec(name)
+        if not spec.available() or spec.ablation or name == "copi-learnt-continual":
             continue
         level = spec.levels[-1]
         costs = []
         for sim, limit in zip(episodes, limits, strict=True):
             agent = make_agent(name, caps.get(spec.capabilities or ""))
-            costs.append(run_agent(agent, copy.deepcopy(sim), sensing=level,
+            costs.append(run_episode(agent, copy.deepcopy(sim), sensing=level,
                                    max_steps=limit).decision_us)  # fmt: skip
         rows.append(Timing(f"{name} ({level})", float(np.median(costs)) * 1e-6))
     ref = next(r for r in rows if r.name == "copi-extended (map)")

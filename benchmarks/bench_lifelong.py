@@ -18,7 +18,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from copi.experiments._episode import optimal_to_goal, run_agent
+from copi.experiments._episode import optimal_to_goal, run_episode
 from copi.experiments.benchmark import benchmark_max_steps
 from copi.experiments.lifelong import draw_life
 from copi.experiments.methods import make_agent
@@ -54,7 +54,7 @@ def _life(caps: Any, strategy: str, sims: list[Any], optima: list[float]) -> dic
     for t, (base, optimal) in enumerate(zip(sims, optima, strict=True)):
         sim = copy.deepcopy(base)
         if t == 0:  # build the strategy, then wrap its parts
-            run_agent(agent, copy.deepcopy(base), sensing="sensor", max_steps=1,
+            run_episode(agent, copy.deepcopy(base), sensing="sensor", max_steps=1,
                       strategy=strategy, origin=origin)  # fmt: skip
             part: Any = steering.causal if strategy == "causal" else steering.mapping
             if isinstance(part, CausalStrategy):
@@ -66,7 +66,7 @@ def _life(caps: Any, strategy: str, sims: list[Any], optima: list[float]) -> dic
                 assert isinstance(part, Mapping)
                 part._plan = clocks["plan"].wrap(part._plan)  # type: ignore[method-assign]
             part.aim = clocks["aim"].wrap(part.aim)  # type: ignore[method-assign]
-        out = run_agent(agent, sim, sensing="sensor", max_steps=benchmark_max_steps(optimal),
+        out = run_episode(agent, sim, sensing="sensor", max_steps=benchmark_max_steps(optimal),
                         strategy=strategy, origin=origin)  # fmt: skip
         decisions += out.steps
     return {"decisions": decisions, **{k: c for k, c in clocks.items()}}

@@ -91,7 +91,7 @@ def main() -> bool:
             sorted(timeit.repeat(learnt_decision, number=20000, repeat=5))[2] / 20000,
         )
     )
-    # contexts that see motion (copi-learnt+motion, an ablation: no goal of its own)
+    # contexts that see motion (copi-learnt-motion, an ablation: no goal of its own)
     moving = learn(LearnParams(directions=16, safety=True, motion=True))
     motion_decision = one_decision(
         LearntAgent(moving, guard=1.05, alpha=2.0, beta=0.25, wait=False)

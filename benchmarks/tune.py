@@ -4,8 +4,10 @@ reported ones (seed 0), with the same budget of four settings per method.
     python benchmarks/tune.py --episodes 40 --workers 2
 
 Prints, per method, success and median excess of each setting, and the chosen one (the
-highest success; within one point, the lower median excess). The chosen values are the
-``params`` of ``copi.experiments.methods.METHODS``; docs/tuning.md keeps the last table.
+highest success; within one point, the lower median excess). A chosen value lives in
+one place: the default of the method's class (which the registry, ``copi list`` and the
+reports read); the last column says whether the registered value is the chosen one, and
+the script exits with status 1 when one is not. docs/tuning.md keeps the last table.
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from copi.experiments._episode import optimal_to_goal, run_agent
+from copi.experiments import optimal_to_goal, run_episode
 from copi.experiments.benchmark import benchmark_max_steps, ensure_capabilities
 from copi.experiments.methods import make_agent, method_spec
 from copi.experiments.navigation import draw_episode
@@ -48,8 +50,8 @@ GRID: dict[str, list[dict[str, float]]] = {
     ],
     "replan": [{"inflate": v} for v in (0.3, 0.6, 1.0, 1.5)],
     # the weight of the template safety priors in the learnt preset's ablations
-    "copi-learnt+priors": [{"beta": v} for v in (0.25, 0.5, 1.0, 2.0)],
-    "copi-learnt+motion": [{"beta": v} for v in (0.25, 0.5, 1.0, 2.0)],
+    "copi-learnt-priors": [{"beta": v} for v in (0.25, 0.5, 1.0, 2.0)],
+    "copi-learnt-motion": [{"beta": v} for v in (0.25, 0.5, 1.0, 2.0)],
     "navground-hrvo": [{"safety_margin": v} for v in (0.1, 0.3, 0.6, 1.0)],
     "navground-hl": [{"safety_margin": v} for v in (0.1, 0.3, 0.6, 1.0)],
 }
@@ -65,12 +67,12 @@ def _episode(args: tuple[str, int]) -> list[tuple[str, int, str, float]]:
     out = []
     for method, settings in GRID.items():
         spec = method_spec(method)
-        if not spec.available:
+        if not spec.available():
             continue
         level = "oracle" if spec.sensing == "oracle" else "map"
         caps = Capabilities.load(CAPS[spec.capabilities]) if spec.capabilities else None
         for i, p in enumerate(settings):
-            res = run_agent(make_agent(method, caps, **p), copy.deepcopy(base), sensing=level,
+            res = run_episode(make_agent(method, caps, **p), copy.deepcopy(base), sensing=level,
                             max_steps=steps)  # fmt: skip
             ex = res.path_length / optimal - 1 if res.outcome == "success" else math.nan
             out.append((method, i, res.outcome, ex))
@@ -111,9 +113,10 @@ def main() -> None:
         f"# Tuning (validation seed {SEED}, families {a.families}, {a.episodes} episodes "
         "each, level map; oracle for oracle methods)",
         "",
-        "| method | setting | success | collision | median excess | chosen |",
-        "|---|---|---|---|---|---|",
+        "| method | setting | success | collision | median excess | chosen | registered |",
+        "|---|---|---|---|---|---|---|",
     ]
+    stale = []
     for method, settings in GRID.items():
         stats = []
         for i, p in enumerate(settings):
@@ -128,13 +131,21 @@ def main() -> None:
             continue
         top = max(s[2] for s in stats)
         best = min((s for s in stats if s[2] >= top - 0.01), key=lambda s: s[4])
+        registered = method_spec(method).params
         for i, p, succ, coll, ex in stats:
             mark = "**yes**" if i == best[0] else ""
+            now = "yes" if all(registered.get(k) == v for k, v in p.items()) else ""
+            if mark and not now:
+                stale.append(f"{method}: chosen {p}, registered {registered}")
             lines.append(f"| {method} | {p} | {100 * succ:.1f} % | {100 * coll:.1f} % | "
-                         f"{100 * ex:.1f} % | {mark} |")  # fmt: skip
+                         f"{100 * ex:.1f} % | {mark} | {now} |")  # fmt: skip
     text = "\n".join(lines) + "\n"
     Path(a.out).write_text(text, encoding="utf-8")
     print(text)
+    if stale:
+        print("tune.py: registered values differ from the chosen ones (change the class "
+              "defaults):\n  " + "\n  ".join(stale), file=sys.stderr)
+        raise SystemExit(1)
 
 
 if __name__ == "__main__":

@@ -10,6 +10,7 @@ temporary directory.
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 import tempfile
 import time
@@ -19,35 +20,45 @@ from pathlib import Path
 def main() -> None:
     from copi.experiments.benchmark import BenchmarkConfig, run_benchmark
     from copi.experiments.methods import method_spec, parse_methods
+    from copi.experiments.presets import PRESETS
     from copi.experiments.pursuit import PursuitConfig, pursue
-    from copi.learning import LearnParams, learn
+    from copi.learning import learn
 
     t0 = time.perf_counter()
     print("copi: compiling kernels once (numba), about 30 s", file=sys.stderr, flush=True)
     with tempfile.TemporaryDirectory() as tmp:
         d = Path(tmp)
-        caps = learn(LearnParams(worlds=3, steps=60, directions=16, seed=0, safety=True,
-                                 probe_worlds=2, probe_steps=20))  # fmt: skip
-        caps_path = d / "capabilities.npz"
-        caps.save(caps_path)
+        paths = {}
+        for name, preset in PRESETS.items():
+            if name == "learnt-motion":
+                continue
+            small = dataclasses.replace(preset.learn, worlds=3, steps=60, probe_worlds=2,
+                                        probe_steps=20)  # fmt: skip
+            paths[name] = str(d / f"capabilities-{name}.npz")
+            learn(small).save(paths[name])
+        caps_path = paths["learnt"]
         families = ["star", "polygon", "indoor", "crowd", "maps"]
-        methods = [m for m in parse_methods(None) if method_spec(m[0]).available]
+        methods = [r for r in parse_methods(None) if method_spec(r.method).available()]
         config = BenchmarkConfig(
             methods=tuple(methods), families=tuple(families), episodes=1, seed=0,
-            capabilities={p: str(caps_path) for p in ("faithful", "extended", "learnt")},
+            capabilities=paths,
         )  # fmt: skip
         run_benchmark(config, d / "bench.sqlite")
-        from copi.experiments.lifelong import LifelongConfig, run_lifelong
+        from copi.experiments.lifelong import (
+            LifelongConfig,
+            parse_lifelong_methods,
+            run_lifelong,
+        )
 
         run_lifelong(
             LifelongConfig(str(caps_path), family="indoor", worlds=1, tasks=1,
-                           methods=("copi-learnt+causal",)),
+                           methods=parse_lifelong_methods("copi-learnt@sensor:causal")),
             d / "lifelong.sqlite",
         )  # fmt: skip
         for dynamic in (False, True):
             for evader in ("capability", "game"):
                 pursue(
-                    PursuitConfig(capabilities=str(caps_path), evader=evader, dynamic=dynamic,
+                    PursuitConfig(capabilities=paths["extended"], evader=evader, dynamic=dynamic,
                                   games=1, horizon=30),
                     d / "pursuit.sqlite",
                 )  # fmt: skip

@@ -10,9 +10,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from copi.experiments._episode import EpisodeOutcome, run_agent
+from copi.core import Agent, Observation, Task
+from copi.experiments._episode import EpisodeOutcome, run_episode
 from copi.experiments.methods import make_agent
-from copi.online import Agent, Observation, Task
 from copi.planning import shortest_path
 from copi.world import Simulator, StepResult, World
 from tests.common import SQUARE_ROOM
@@ -47,7 +47,7 @@ class WallCounter(Simulator):
         return res
 
 
-class Spy:
+class Spy(Agent):
     """Wraps an agent and records the task and every observation it is handed."""
 
     def __init__(self, agent: Agent) -> None:
@@ -64,6 +64,12 @@ class Spy:
     def act(self, obs: Observation) -> NDArray[np.float64]:
         self.observations.append(obs)
         return self.agent.act(obs)
+
+    def finish(self, outcome: str) -> None:
+        self.agent.finish(outcome)
+
+    def counters(self) -> dict[str, Any]:
+        return self.agent.counters()
 
 
 def empty(start: Any, goal: Any, world: World = SQUARE_ROOM) -> WallCounter:
@@ -88,7 +94,7 @@ def route_length(world: World, start: Any, goal: Any) -> float:
 
 def run(name: str, sim: Simulator, level: str, max_steps: int, **params: Any) -> EpisodeOutcome:
     """A fresh ``name`` agent run in ``sim`` at ``level``."""
-    return run_agent(make_agent(name, **params), sim, sensing=level, max_steps=max_steps)
+    return run_episode(make_agent(name, **params), sim, sensing=level, max_steps=max_steps)
 
 
 __all__ = [

@@ -9,9 +9,9 @@ import math
 import numpy as np
 import pytest
 
-from copi.experiments._episode import make_task, run_agent
+from copi.core import Observation, Task
+from copi.experiments._episode import make_task, run_episode
 from copi.experiments.methods import make_agent
-from copi.online import Observation, Task
 from copi.world import Simulator
 from tests.baselines._support import (
     EMPTY_PAIRS,
@@ -101,7 +101,7 @@ def test_straight_runs_into_a_disc_coming_head_on(x, y):
 def test_run_agent_hands_each_level_only_its_information(level):
     sim = Simulator(SQUARE_ROOM, [3, 3], [17, 15], [[10, 4], [6, 12]], [0.5, 0.8], seed=1)
     spy = Spy(make_agent("compass-guard"))
-    run_agent(spy, sim, sensing=level, max_steps=30)
+    run_episode(spy, sim, sensing=level, max_steps=30)
     (task,) = spy.tasks
     assert task.sensing == level
     assert (task.n_rays, task.max_range, task.agent_radius) == (32, 10.0, 0.3)
@@ -139,7 +139,7 @@ def test_sensor_methods_run_on_ranges_and_relative_goal_alone(name):
         else head_on(10.0, 10.0, radius=0.5, speed=0.0)
     )
     spy = Spy(make_agent(name))
-    res = run_agent(spy, sim, sensing="sensor", max_steps=40)
+    res = run_episode(spy, sim, sensing="sensor", max_steps=40)
     assert res.outcome == "success"
     (task,) = spy.tasks
     assert (task.world, task.start, task.goal) == (None, None, None)
@@ -148,7 +148,7 @@ def test_sensor_methods_run_on_ranges_and_relative_goal_alone(name):
 
 @pytest.mark.parametrize("name", LOCAL)
 def test_sensor_methods_act_on_a_bare_task_and_observation(name):
-    # Built by hand, not by run_agent: nothing but what level 'sensor' defines.
+    # Built by hand, not by run_episode: nothing but what level 'sensor' defines.
     agent = make_agent(name)
     agent.reset(Task(sensing="sensor", agent_radius=0.3, goal_tolerance=0.5, n_rays=32,
                      max_range=10.0))  # fmt: skip
@@ -176,7 +176,7 @@ def test_same_episode_twice_gives_the_same_result(name, level):
 def test_a_task_of_the_wrong_level_is_refused_by_the_runner():
     sim = empty((3, 3), (17, 15))
     with pytest.raises(Exception, match="sensing level must be one of sensor, map, oracle"):
-        run_agent(make_agent("vfh"), sim, sensing="lidar", max_steps=5)
+        run_episode(make_agent("vfh"), sim, sensing="lidar", max_steps=5)
     # A level above the least one is fine: the method is handed more and may ignore it.
     task = make_task(sim, "oracle")
     assert task.world is SQUARE_ROOM

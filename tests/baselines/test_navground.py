@@ -9,8 +9,8 @@ import pytest
 
 from copi.baselines import NavgroundAgent, NavgroundMissingError, navground_available
 from copi.errors import InvalidArgumentError
-from copi.experiments._episode import make_task, run_agent
-from copi.experiments.methods import METHODS, make_agent
+from copi.experiments._episode import make_task, run_episode
+from copi.experiments.methods import make_agent, method_spec
 from copi.world import Simulator
 from tests.baselines._support import EMPTY_PAIRS, empty, head_on, run
 from tests.common import PILLARS
@@ -60,7 +60,7 @@ def test_navground_refuses_to_run_below_oracle(navground, name, level):
     sim = empty((3, 3), (17, 15))
     message = f"{name} needs sensing level 'oracle' or above; asked to run at '{level}'"
     with pytest.raises(InvalidArgumentError, match=message):
-        run_agent(make_agent(name), sim, sensing=level, max_steps=5)
+        run_episode(make_agent(name), sim, sensing=level, max_steps=5)
     with pytest.raises(InvalidArgumentError, match=message):
         make_agent(name).reset(make_task(sim, level))
 
@@ -88,16 +88,17 @@ def test_without_navground_its_peers_say_so_and_the_rest_still_work(monkeypatch)
     monkeypatch.setitem(sys.modules, "navground.core", None)
     assert not navground_available()
     for name in ("navground-hl", "navground-hrvo", "navground-orca"):
-        assert not METHODS[name].available
+        assert not method_spec(name).available()
         with pytest.raises(
-            NavgroundMissingError,
-            match=f"{name} needs navground, which is not installed: pip install 'copi\\[peers\\]'",
+            InvalidArgumentError,
+            match=f"{name} needs the optional extra 'peers', which is not installed: "
+            "pip install 'copi\\[peers\\]'",
         ):
             make_agent(name)
     with pytest.raises(NavgroundMissingError, match="navground is not installed"):
         NavgroundAgent("HL")
     for name in ("straight", "compass-guard", "vfh", "dwa", "tangent-bug", "replan"):
-        assert METHODS[name].available
+        assert method_spec(name).available()
         level = "oracle" if name == "replan" else "sensor"
         res = run(name, empty((3, 3), (17, 15)), level, max_steps=40)
         assert res.outcome == "success"

@@ -6,7 +6,7 @@ import pytest
 
 from copi.baselines import Replan
 from copi.errors import InvalidArgumentError
-from copi.experiments._episode import make_task, run_agent
+from copi.experiments._episode import make_task, run_episode
 from copi.experiments.methods import make_agent, parse_methods
 from copi.world import Simulator
 from tests.baselines._support import EMPTY_PAIRS, TRAP_GOAL, empty, head_on, route_length, run
@@ -52,7 +52,7 @@ def test_replan_refuses_to_run_below_oracle(level):
     sim = empty((3, 3), (17, 15))
     message = f"replan needs sensing level 'oracle' or above; asked to run at '{level}'"
     with pytest.raises(InvalidArgumentError, match=message):
-        run_agent(make_agent("replan"), sim, sensing=level, max_steps=5)
+        run_episode(make_agent("replan"), sim, sensing=level, max_steps=5)
     # Told the task directly, it refuses too (it used to accept a 'map' task and fail
     # later on an assertion, at its first step, for want of the obstacles).
     with pytest.raises(InvalidArgumentError, match=message):

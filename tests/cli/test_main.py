@@ -160,7 +160,8 @@ def test_learn_inspect_figures(tmp_path: Path, capsys: pytest.CaptureFixture[str
 
 def test_evaluate_report_and_bad_inputs(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     caps = tmp_path / "caps.npz"
-    run(["learn", "-o", str(caps), "--worlds", "8", "--steps", "150"], capsys)
+    run(["learn", "-o", str(caps), "--worlds", "8", "--steps", "150", "--preset", "faithful"],
+        capsys)  # fmt: skip
     results = tmp_path / "r.sqlite"
     code, out, err = run(
         ["evaluate", str(caps), "-o", str(results), "--worlds", "4", "--max-steps", "200"], capsys
@@ -186,7 +187,7 @@ def test_evaluate_report_and_bad_inputs(tmp_path: Path, capsys: pytest.CaptureFi
     assert code == 2 and "not a complete .npz archive" in err
     assert not (tmp_path / "b.sqlite").exists()
     for bad, message in [
-        (["--method", "astar"], "method must be one of copi-faithful, copi-extended, copi-learnt, copi-learnt+priors"),
+        (["--method", "astar"], "method must be one of copi-faithful, copi-extended, copi-learnt, copi-learnt-priors"),
         (
             ["--sensing", "psychic"],
             "sensing level must be one of sensor, map, oracle; got 'psychic'",
@@ -201,13 +202,16 @@ def test_evaluate_report_and_bad_inputs(tmp_path: Path, capsys: pytest.CaptureFi
         assert code == 2 and message in err and "Traceback" not in err, err
         assert not (tmp_path / "x.sqlite").exists()
     code, _, err = run(["evaluate", "-o", str(tmp_path / "y.sqlite")], capsys)
+    assert code == 2 and "give a capabilities file (for copi's modes), --preset NAME" in err
+    code, _, err = run(["evaluate", "-o", str(tmp_path / "y.sqlite"), "--preset", "faithful"],
+                       capsys)  # fmt: skip
     assert code == 2 and "copi-faithful needs a capabilities file" in err
     code, out, err = run(
         ["evaluate", "--method", "dwa", "-o", str(tmp_path / "d.sqlite"), "--worlds", "2",
          "--max-steps", "100"],
         capsys,
     )  # fmt: skip
-    assert code == 0 and "dwa (map): 2 episodes" in out, err
+    assert code == 0 and "dwa (map, star): 2 episodes" in out, err
     code, _, err = run(
         ["report", str(tmp_path / "missing.sqlite"), "-o", str(tmp_path / "q")], capsys
     )
@@ -216,7 +220,8 @@ def test_evaluate_report_and_bad_inputs(tmp_path: Path, capsys: pytest.CaptureFi
 
 def test_pursuit_command(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     caps = tmp_path / "caps.npz"
-    run(["learn", "-o", str(caps), "--worlds", "8", "--steps", "150"], capsys)
+    run(["learn", "-o", str(caps), "--worlds", "8", "--steps", "150", "--preset", "faithful"],
+        capsys)  # fmt: skip
     results = tmp_path / "g.sqlite"
     code, out, err = run(
         ["pursuit", str(caps), "-o", str(results), "--games", "3", "--horizon", "60", "--static"],
@@ -237,39 +242,47 @@ def test_presets_set_a_mode_whole(tmp_path: Path, capsys: pytest.CaptureFixture[
     results = tmp_path / "r.sqlite"
     code, out, err = run(["evaluate", str(caps), "-o", str(results), "--worlds", "2",
                           "--max-steps", "80", "--preset", "extended"], capsys)  # fmt: skip
-    assert code == 0 and "copi-extended (map): 2 episodes" in out, err
+    assert code == 0 and "copi-extended (map, star): 2 episodes" in out, err
     with sqlite3.connect(results) as db:
         config = json.loads(db.execute("SELECT config FROM runs").fetchone()[0])
     assert config["method"] == "copi-extended" and config["guard"] is None  # the method's
-    from copi.experiments.methods import METHODS
+    from copi.experiments.methods import method_spec
 
-    assert METHODS["copi-extended"].params["guard"] == 1.2
+    assert method_spec("copi-extended").params["guard"] == 1.2
     code, out, err = run(["pursuit", str(caps), "-o", str(tmp_path / "g.sqlite"), "--games",
                           "1", "--horizon", "20", "--preset", "extended"], capsys)  # fmt: skip
     assert code == 0 and "1 games" in out, err
     faithful = tmp_path / "f.npz"
-    run(["learn", "-o", str(faithful), "--worlds", "6", "--steps", "120"], capsys)
+    run(["learn", "-o", str(faithful), "--worlds", "6", "--steps", "120", "--preset", "faithful"],
+        capsys)  # fmt: skip
     for args, message in [
         (["learn", "-o", str(tmp_path / "z.npz"), "--preset", "extended", "--directions", "4"],
          "--directions 4 contradicts --preset extended (16 directions)"),
         (["learn", "-o", str(tmp_path / "z.npz"), "--preset", "fancy"],
          "preset must be one of faithful, extended, learnt"),
         (["evaluate", str(faithful), "-o", str(tmp_path / "z.sqlite"), "--preset", "extended"],
-         f"{faithful} was learnt with 4 directions; preset extended needs 16: learn it with "
-         "copi learn --preset extended"),
+         f"{faithful} was learnt for preset faithful (4 directions, no safety priors); preset "
+         "extended needs 16 directions, no safety priors: learn it with copi learn --preset "
+         "extended, or run it with --preset faithful"),
         (["evaluate", str(caps), "-o", str(tmp_path / "z.sqlite"), "--preset", "extended",
           "--method", "dwa"], "--method dwa contradicts --preset extended (copi-extended)"),
         (["pursuit", str(caps), "-o", str(tmp_path / "z.sqlite"), "--preset", "faithful"],
-         "was learnt with 16 directions; preset faithful needs 4"),
+         "was learnt for preset extended (16 directions, no safety priors); preset faithful "
+         "needs 4 directions"),
         (["evaluate", str(caps), "-o", str(tmp_path / "z.sqlite"), "--preset", "learnt"],
-         f"{caps} has no safety priors; preset learnt needs them: learn it with copi learn "
-         "--preset learnt"),
+         f"{caps} was learnt for preset extended (16 directions, no safety priors); preset "
+         "learnt needs 16 directions, safety priors: learn it with copi learn --preset learnt"),
+        (["evaluate", str(caps), "-o", str(tmp_path / "z.sqlite"), "--preset", "extended",
+          "--guard", "3"], "--guard 3 contradicts --preset extended (guard 1.2)"),
         (["pursuit", str(caps), "-o", str(tmp_path / "z.sqlite"), "--preset", "learnt"],
-         f"{caps} has no safety priors; preset learnt needs them"),
+         f"{caps} was learnt for preset extended"),
         (["pursuit", str(caps), "-o", str(tmp_path / "z.sqlite"), "--evader", "learnt"],
-         f"{caps} has no safety priors; preset learnt needs them"),
+         f"--evader learnt plays the learnt preset's agent; {caps} was learnt for preset "
+         "extended"),
         (["pursuit", str(caps), "-o", str(tmp_path / "z.sqlite"), "--evader", "learnt",
-          "--preset", "extended"], "--evader learnt needs --preset learnt, not extended"),
+          "--preset", "extended"], "--evader learnt plays the learnt preset's agent"),
+        (["pursuit", str(caps), "-o", str(tmp_path / "z.sqlite"), "--preset", "extended",
+          "--guard", "2"], "--guard 2 contradicts --preset extended (guard 1.2)"),
     ]:  # fmt: skip
         code, _, err = run(args, capsys)
         assert code == 2 and message in " ".join(err.split()), err
@@ -279,10 +292,10 @@ def test_presets_set_a_mode_whole(tmp_path: Path, capsys: pytest.CaptureFixture[
 def test_reproduce_into_a_directory_of_another_run_says_what_to_do(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch
 ) -> None:
-    import copi.cli.experiments as commands
+    import copi.experiments.reproduce as commands
     from copi.experiments.store import ResultsStore
 
-    def clash(output: Path, quick: bool, workers: int, seed: int) -> None:
+    def clash(output: Path, quick: bool, workers: int, seed: int, tasks: object) -> None:
         with ResultsStore(output / "experiment1.sqlite") as store:  # as a --quick run left it
             store.begin("a", "navigation", "copi-faithful", {"worlds": 100})
             store.begin("b", "navigation", "copi-faithful", {"worlds": 1549})
@@ -292,5 +305,5 @@ def test_reproduce_into_a_directory_of_another_run_says_what_to_do(
     assert code == 2, err
     assert " ".join(err.split()) == (
         f"copi: error: {tmp_path / 'res'} holds results of a --quick run or of other settings; "
-        f"reproduce into another directory (-o), or delete {tmp_path / 'res'} to start over"
+        f"reproduce into another directory, or delete {tmp_path / 'res'} to start over"
     )

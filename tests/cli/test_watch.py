@@ -34,7 +34,7 @@ def test_watch_writes_a_gif_with_the_episodes_frames(
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        (["watch", "-o", "x.gif"], "give a capabilities file (for copi's methods) or --method"),
+        (["watch", "-o", "x.gif"], "give a capabilities file (for copi's modes), --preset NAME or --method NAME"),
         (["watch", "--method", "copi-extended", "-o", "x.gif"],
          "copi-extended needs a capabilities file"),
         (["watch", "--method", "dwa", "-o", "x.avi"], "-o must end in .gif, .mp4, .png"),

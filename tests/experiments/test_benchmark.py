@@ -8,7 +8,7 @@ import pytest
 
 from copi.experiments.benchmark import BenchmarkConfig, benchmark_max_steps, run_benchmark
 from copi.experiments.benchmark_report import paired_difference, write_benchmark_report
-from copi.experiments.methods import parse_methods
+from copi.experiments.methods import MethodRun, parse_methods
 from copi.experiments.store import ResultsStore
 from copi.learning import LearnParams, learn
 from tests.cli.test_main import run
@@ -52,13 +52,22 @@ def test_step_limit() -> None:
 
 
 def test_parse_methods() -> None:
-    assert parse_methods("dwa") == [("dwa", "sensor"), ("dwa", "map")]
+    assert parse_methods("dwa") == [MethodRun("dwa", "sensor", "greedy"),
+                                    MethodRun("dwa", "map", "route")]  # fmt: skip
     assert parse_methods("copi-extended@map,replan") == [
-        ("copi-extended", "map"),
-        ("replan", "oracle"),
+        MethodRun("copi-extended", "map", "route"),
+        MethodRun("replan", "oracle", "route"),
     ]
+    assert parse_methods("dwa@sensor:mapping,dwa", strategy="causal") == [
+        MethodRun("dwa", "sensor", "causal"), MethodRun("dwa", "sensor", "mapping"),
+        MethodRun("dwa", "map", "route"),
+    ]  # fmt: skip
     with pytest.raises(ValueError, match="replan needs sensing level 'oracle' or above"):
         parse_methods("replan@sensor")
+    with pytest.raises(ValueError, match="a global strategy is chosen at level sensor only"):
+        parse_methods("dwa@map:mapping")
+    with pytest.raises(ValueError, match=r"got 'copi-learnt\+priors' \(now 'copi-learnt-priors'\)"):
+        parse_methods("copi-learnt+priors")
 
 
 @pytest.fixture(scope="module")
@@ -113,7 +122,7 @@ def test_every_method_meets_the_same_episodes_and_runs_resume(
     report = write_benchmark_report(out, tmp_path / "rep")
     text = report.read_text()
     assert "## star (6 episodes)" in text and "## indoor (4 episodes)" in text
-    assert "| compass-guard | sensor |" in text
+    assert "| compass-guard | sensor | greedy | 6 |" in text
     assert (tmp_path / "rep" / "benchmark_success_excess.png").stat().st_size > 10_000
 
 
@@ -145,7 +154,7 @@ def test_benchmark_without_navground(
     code, _, err = run(
         ["benchmark", "-o", str(tmp_path / "b"), "--methods", "navground-hl"], capsys
     )
-    assert code == 2 and "navground-hl needs navground, which is not installed" in err
+    assert code == 2 and "navground-hl needs the optional extra 'peers'" in err
     assert not (tmp_path / "b").exists()
     code, out, err = run(
         ["benchmark", "-o", str(tmp_path / "c"), "--methods", "straight@map,dwa@map",
@@ -153,24 +162,28 @@ def test_benchmark_without_navground(
         capsys,
     )  # fmt: skip
     assert code == 0, err
-    assert "| straight | map |" in out and "| dwa | map |" in out
+    # no copi-learnt here: the reference is the first method run, and the report says so
+    assert "**Reference: straight** (the first method of the run" in out
+    assert "| **straight** | map | route | 2 |" in out and "| dwa | map | route | 2 |" in out
 
 
 def test_a_mapping_run_is_its_own_run(tmp_path: Path) -> None:
-    methods = tuple(parse_methods("compass-guard@sensor,compass-guard@map"))
-    greedy = BenchmarkConfig(methods=methods, families=("indoor",), episodes=2)
-    mapping = BenchmarkConfig(methods=methods, families=("indoor",), episodes=2,
-                              sensor_strategy="mapping")  # fmt: skip
-    assert greedy.run_id("indoor", "compass-guard", "sensor") != mapping.run_id(
-        "indoor", "compass-guard", "sensor"
-    )
-    # The map level follows the route either way: the same run.
-    assert greedy.run_id("indoor", "compass-guard", "map") == mapping.run_id(
-        "indoor", "compass-guard", "map"
-    )
-    run_benchmark(mapping, tmp_path / "m.sqlite")
+    greedy = parse_methods("compass-guard@sensor,compass-guard@map")
+    mapping = parse_methods("compass-guard@sensor,compass-guard@map", strategy="mapping")
+    assert greedy[1] == mapping[1]  # the map level follows the route either way
+    both = BenchmarkConfig(methods=(*greedy, mapping[0]), families=("indoor",), episodes=2)
+    assert both.run_id("indoor", greedy[0]) != both.run_id("indoor", mapping[0])
+    run_benchmark(both, tmp_path / "m.sqlite")
     text = write_benchmark_report(tmp_path / "m.sqlite", tmp_path / "rep").read_text()
     assert "*mapping* (a map built from the ranges, re-planned)" in text
+    assert "| **compass-guard** | sensor | greedy | 2 |" in text
+    assert "| **compass-guard** | sensor | mapping | 2 |" in text
+    # a strategy no older report knew is reported as the others are
+    causal = BenchmarkConfig(methods=tuple(parse_methods("compass-guard@sensor:causal")),
+                             families=("indoor",), episodes=1)  # fmt: skip
+    run_benchmark(causal, tmp_path / "m.sqlite")
+    text = write_benchmark_report(tmp_path / "m.sqlite", tmp_path / "rep").read_text()
+    assert "| **compass-guard** | sensor | causal | 1 |" in text
 
 
 def test_stale_capabilities_are_refused_not_reused(
@@ -178,18 +191,24 @@ def test_stale_capabilities_are_refused_not_reused(
 ) -> None:
     """A directory's capabilities learnt with seed 0 are not taken for a seed-1 run (as
     `reproduce -o D --seed 1` and `benchmark` once did), and are left as they were."""
+    import dataclasses
+
     import copi.experiments.benchmark as bm
     from copi.errors import InvalidArgumentError
+    from copi.experiments.presets import PRESETS
     from copi.learning import LearnParams
 
-    small = LearnParams(worlds=4, steps=80, directions=4)
-    monkeypatch.setitem(bm.CAPABILITY_PRESETS, "faithful", small)
+    def learns(params: LearnParams) -> None:
+        monkeypatch.setitem(PRESETS, "faithful", dataclasses.replace(PRESETS["faithful"],
+                                                                     learn=params))  # fmt: skip
+
+    learns(LearnParams(worlds=4, steps=80, directions=4))
     path = Path(bm.ensure_capabilities(tmp_path, {"faithful"}, seed=0)["faithful"])
     before = path.read_bytes()
     assert bm.ensure_capabilities(tmp_path, {"faithful"}, seed=0)["faithful"] == str(path)
     with pytest.raises(InvalidArgumentError, match="learnt with seed=0, not 1"):
         bm.ensure_capabilities(tmp_path, {"faithful"}, seed=1)
-    monkeypatch.setitem(bm.CAPABILITY_PRESETS, "faithful", LearnParams(worlds=5, steps=80))
+    learns(LearnParams(worlds=5, steps=80))
     with pytest.raises(InvalidArgumentError, match="learnt with worlds=4, not 5"):
         bm.ensure_capabilities(tmp_path, {"faithful"}, seed=0)
     assert path.read_bytes() == before

@@ -10,7 +10,8 @@ from typing import Any
 import numpy as np
 import pytest
 
-from copi.experiments._episode import run_agent
+from copi.core import Agent, Observation, Task
+from copi.experiments._episode import run_episode
 from copi.experiments.lifelong import (
     LifelongConfig,
     draw_life,
@@ -19,10 +20,10 @@ from copi.experiments.lifelong import (
     world_identity,
 )
 from copi.experiments.lifelong_report import lifelong_blocks, lives_difference
-from copi.experiments.methods import make_agent
+from copi.experiments.methods import MethodRun, make_agent
 from copi.experiments.store import ResultsStore
 from copi.learning import Capabilities, LearnParams, learn
-from copi.online import CausalMap, CausalMapFormatError, LearntAgent, Observation, Task
+from copi.online import CausalMap, CausalMapFormatError, LearntAgent
 from tests.cli.test_main import run
 
 
@@ -49,7 +50,7 @@ def test_a_life_is_a_chain_of_tasks_drawn_from_its_index() -> None:
     assert not np.array_equal(other.goal, sims[0].goal)
 
 
-class _Spy:
+class _Spy(Agent):
     name = "spy"
     sensing = "sensor"
 
@@ -75,7 +76,7 @@ def test_a_lifelong_agent_is_told_its_odometry_and_nothing_more() -> None:
     spy = _Spy()
     for sim in sims:
         start = sim.position.copy()
-        out = run_agent(spy, sim, sensing="sensor", max_steps=5, origin=origin)
+        out = run_episode(spy, sim, sensing="sensor", max_steps=5, origin=origin)
         first = spy.seen[-out.steps]
         assert np.allclose(first.odometry, start - origin)
         assert first.position is None and first.static is None and first.obstacles is None
@@ -84,7 +85,7 @@ def test_a_lifelong_agent_is_told_its_odometry_and_nothing_more() -> None:
     assert len(spy.outcomes) == 2  # told how each task ended
     # Outside a life there is no odometry.
     single = _Spy()
-    run_agent(single, draw_life("indoor", 0, 0, 1)[0], sensing="sensor", max_steps=2)
+    run_episode(single, draw_life("indoor", 0, 0, 1)[0], sensing="sensor", max_steps=2)
     assert single.seen[0].odometry is None and not single.tasks[0].lifelong
 
 
@@ -93,7 +94,7 @@ def test_continual_contexts_grow_and_make_a_reading_familiar(learnt: str) -> Non
     agent = make_agent("copi-learnt", caps, continual=True)
     assert isinstance(agent, LearntAgent)
     sim = draw_life("indoor", 0, 0, 1)[0]
-    run_agent(agent, sim, sensing="sensor", max_steps=3, origin=sim.position.copy())
+    run_episode(agent, sim, sensing="sensor", max_steps=3, origin=sim.position.copy())
     odd = np.full(caps.n_rays, 0.4)  # a reading no exploration produced: walls all round
     odd[::2] = 9.5
     obs = Observation(ranges=odd, goal=np.array([5.0, 0.0]), odometry=np.zeros(2))
@@ -116,13 +117,13 @@ def _rows(path: Path) -> list[dict]:
 
 
 def test_runner_resumes_a_life_at_a_time_and_saves_causal_maps(learnt: str, tmp_path: Path) -> None:
-    methods = ("copi-learnt+causal", "compass-guard+mapping")
+    methods = ("copi-learnt@sensor:causal", "compass-guard@sensor:mapping")
     cfg = LifelongConfig(learnt, family="indoor", worlds=2, tasks=3, methods=methods,
                          maps=str(tmp_path / "maps"))  # fmt: skip
     out = tmp_path / "life.sqlite"
     runs = run_lifelong(cfg, out, workers=1)
     rows = _rows(out)
-    assert len(rows) == 2 * 2 * 3 and set(runs) == set(methods)
+    assert len(rows) == 2 * 2 * 3 and {r.label for r in runs} == set(methods)
     by_task: dict[tuple[int, int], list[dict]] = {}
     for r in rows:
         by_task.setdefault((r["life"], r["task"]), []).append(r)
@@ -130,20 +131,20 @@ def test_runner_resumes_a_life_at_a_time_and_saves_causal_maps(learnt: str, tmp_
         assert r["success"] == (r["outcome"] == "success")
     for group in by_task.values():  # the same task for every method
         assert len({g["optimal_length"] for g in group}) == 1
-    causal = [r for r in rows if r["method"] == "copi-learnt+causal"]
+    causal = [r for r in rows if r["method"] == "copi-learnt" and r["strategy"] == "causal"]
     for life in (0, 1):
         opts = [r["options"] for r in causal if r["life"] == life]
         assert opts == sorted(opts) and opts[-1] > 0  # the map only grows through a life
     # A lost life is run again, whole; the others are not touched.
     with sqlite3.connect(out) as db:
-        db.execute("DELETE FROM lifelong WHERE life = 1 AND method = 'compass-guard+mapping'")
+        db.execute("DELETE FROM lifelong WHERE life = 1 AND method = 'compass-guard'")
     run_lifelong(cfg, out, workers=2)
     assert _rows(out) == rows
     # Each causal life was saved, for its world and these capabilities.
     from copi.experiments._runs import file_sha
 
     ident = world_identity("indoor", 0, 0)
-    saved = tmp_path / "maps" / f"copi-learnt+causal-{ident}.npz"
+    saved = tmp_path / "maps" / f"copi-learnt-sensor-causal-{ident}.npz"
     cmap, occ = CausalMap.load(saved, world=ident, capabilities=file_sha(learnt))
     assert cmap.n_options == causal[2]["options"] and occ is not None
     with pytest.raises(CausalMapFormatError, match="a causal map of world"):
@@ -169,18 +170,18 @@ def test_lives_difference_against_a_hand_computed_case() -> None:
 def test_the_cli_runs_and_reports(learnt: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "run.sqlite"
     code, text, err = run(["lifelong", learnt, "-o", str(out), "--worlds", "1", "--tasks", "2",
-                           "--methods", "copi-learnt+causal,dwa+mapping", "--workers", "1"],
+                           "--methods", "copi-learnt@sensor:causal,dwa@sensor:mapping", "--workers", "1"],
                           capsys)  # fmt: skip
     assert code == 0, err
-    assert "| **copi-learnt+causal** | sensor | causal map + grid |" in text
-    assert "| dwa+mapping |" in text and "Goals:" in text
+    assert "| **copi-learnt@sensor:causal** | sensor | causal | causal map + grid |" in text
+    assert "| dwa@sensor:mapping | sensor | mapping | grid |" in text and "Goals:" in text
     assert out.with_suffix(".png").stat().st_size > 10_000
 
 
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        (["--methods", "astar"], "lifelong method must be one of copi-learnt+causal"),
+        (["--methods", "astar"], "method must be one of copi-faithful"),
         (["--family", "moon"], "family must be one of"),
         (["--tasks", "0"], "--tasks"),
     ],
@@ -202,10 +203,16 @@ def test_capabilities_without_priors_are_refused(
     learn(LearnParams(worlds=3, steps=60, directions=16, seed=0)).save(plain)
     out = tmp_path / "run.sqlite"
     code, _, err = run(["lifelong", str(plain), "-o", str(out), "--worlds", "1"], capsys)
-    assert code == 2 and "has no safety priors; preset learnt needs them" in err, err
+    assert code == 2 and (
+        "was learnt for preset extended (16 directions, no safety priors); preset learnt "
+        "needs 16 directions, safety priors: learn it with copi learn --preset learnt"
+    ) in err, err
     assert "Traceback" not in err
     assert not out.exists()
-    assert parse_lifelong_methods("dwa+mapping, dwa+mapping") == ("dwa+mapping",)
+    assert parse_lifelong_methods("dwa, dwa@sensor:mapping") == (
+        MethodRun("dwa", "sensor", "mapping"),
+    )
+    assert parse_lifelong_methods("copi-learnt")[0].strategy == "causal"
 
 
 def test_a_life_resumes_from_saved_maps_and_bad_maps_are_refused(
@@ -213,7 +220,7 @@ def test_a_life_resumes_from_saved_maps_and_bad_maps_are_refused(
 ) -> None:
     maps = tmp_path / "maps"
     base = ["lifelong", learnt, "--worlds", "1", "--tasks", "2", "--methods",
-            "copi-learnt+causal", "--workers", "1"]  # fmt: skip
+            "copi-learnt@sensor:causal", "--workers", "1"]  # fmt: skip
     code, _, err = run([*base, "-o", str(tmp_path / "a.sqlite"), "--maps", str(maps)], capsys)
     assert code == 0, err
     code, _, err = run([*base, "-o", str(tmp_path / "b.sqlite"), "--from-maps", str(maps)],
@@ -222,14 +229,14 @@ def test_a_life_resumes_from_saved_maps_and_bad_maps_are_refused(
     a, b = _rows(tmp_path / "a.sqlite"), _rows(tmp_path / "b.sqlite")
     # The resumed life starts with the first life's options and adds its own.
     assert b[0]["options"] > a[-1]["options"]
-    saved = maps / f"copi-learnt+causal-{world_identity('indoor', 0, 0)}.npz"
+    saved = maps / f"copi-learnt-sensor-causal-{world_identity('indoor', 0, 0)}.npz"
     # A map of another world (the file renamed), truncated, or missing: one line, exit 2.
     other = tmp_path / "other"
     other.mkdir()
     (other / saved.name.replace("0000", "0001")).write_bytes(saved.read_bytes())
     code, _, err = run([*base, "--worlds", "2", "-o", str(tmp_path / "c.sqlite"),
                         "--from-maps", str(other)], capsys)  # fmt: skip
-    assert code == 2 and "no causal map of copi-learnt+causal in world indoor-life-0000" in err
+    assert code == 2 and "no causal map of copi-learnt@sensor:causal in world indoor-life-0000" in err
     (other / saved.name).write_bytes(saved.read_bytes())
     code, _, err = run([*base, "--worlds", "2", "-o", str(tmp_path / "c.sqlite"),
                         "--from-maps", str(other)], capsys)  # fmt: skip
@@ -257,7 +264,7 @@ def test_a_world_with_no_valid_tasks_is_recorded_as_skipped(
         return real(family, life, *args, **kwargs)
 
     monkeypatch.setattr(lifelong, "draw_life", draw)
-    cfg = LifelongConfig(learnt, worlds=2, tasks=2, methods=("compass-guard+mapping",))
+    cfg = LifelongConfig(learnt, worlds=2, tasks=2, methods=("compass-guard@sensor:mapping",))
     out = tmp_path / "s.sqlite"
     run_lifelong(cfg, out, workers=1)
     rows = _rows(out)
@@ -280,7 +287,7 @@ def test_an_older_store_gains_the_lifelong_table_and_runs_are_reported_apart(
         db.execute("DROP TABLE lifelong")
     for family in ("indoor", "star"):
         cfg = LifelongConfig(learnt, family=family, worlds=1, tasks=2,
-                             methods=("compass-guard+mapping",))  # fmt: skip
+                             methods=("compass-guard@sensor:mapping",))  # fmt: skip
         run_lifelong(cfg, out, workers=1)
     rows = _rows(out)
     assert len(rows) == 4 and {r["family"] for r in rows} == {"indoor", "star"}
@@ -291,14 +298,14 @@ def test_an_older_store_gains_the_lifelong_table_and_runs_are_reported_apart(
 
 def test_saved_maps_identify_a_run_whatever_its_worlds(learnt: str, tmp_path: Path) -> None:
     maps = tmp_path / "maps"
-    first = LifelongConfig(learnt, worlds=2, tasks=1, methods=("copi-learnt+causal",),
+    first = LifelongConfig(learnt, worlds=2, tasks=1, methods=("copi-learnt@sensor:causal",),
                            maps=str(maps))  # fmt: skip
     run_lifelong(first, tmp_path / "a.sqlite", workers=1)
-    one = LifelongConfig(learnt, worlds=1, tasks=1, methods=("copi-learnt+causal",),
+    one = LifelongConfig(learnt, worlds=1, tasks=1, methods=("copi-learnt@sensor:causal",),
                          from_maps=str(maps)).resolved()  # fmt: skip
-    two = LifelongConfig(learnt, worlds=2, tasks=1, methods=("copi-learnt+causal",),
+    two = LifelongConfig(learnt, worlds=2, tasks=1, methods=("copi-learnt@sensor:causal",),
                          from_maps=str(maps)).resolved()  # fmt: skip
-    assert one.run_id("copi-learnt+causal") == two.run_id("copi-learnt+causal")
+    assert one.run_id(one.methods[0]) == two.run_id(two.methods[0])
     with pytest.raises(ValueError, match="--maps and --from-maps are both"):
-        LifelongConfig(learnt, worlds=1, tasks=1, methods=("copi-learnt+causal",),
+        LifelongConfig(learnt, worlds=1, tasks=1, methods=("copi-learnt@sensor:causal",),
                        from_maps=str(maps), maps=str(maps)).resolved()  # fmt: skip

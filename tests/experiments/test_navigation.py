@@ -16,7 +16,7 @@ from copi.experiments import (
     ResultsError,
     ResultsStore,
     evaluate,
-    run_episode,
+    evaluate_episode,
     write_report,
 )
 from copi.learning import LearnParams, learn
@@ -38,8 +38,8 @@ def _rows(path: Path) -> list[dict]:
 
 def test_an_episode_depends_on_its_index_only(caps_path: str) -> None:
     cfg = NavigationConfig(caps_path, worlds=5, max_steps=300).resolved()
-    a = run_episode(cfg, 3)
-    b = run_episode(cfg, 3)
+    a = evaluate_episode(cfg, 3)
+    b = evaluate_episode(cfg, 3)
     assert {k: v for k, v in a.__dict__.items() if k not in TIMINGS} == {
         k: v for k, v in b.__dict__.items() if k not in TIMINGS
     }
@@ -56,7 +56,7 @@ def test_outcomes_are_exclusive_and_excess_is_never_negative(
     cfg = NavigationConfig(
         caps_path, worlds=40, max_steps=150, end_on_contact=end_on_contact
     ).resolved()
-    rows = [run_episode(cfg, k) for k in range(40)]
+    rows = [evaluate_episode(cfg, k) for k in range(40)]
     seen = set()
     for r in rows:
         flags = (r.success, r.collided, r.timed_out)
@@ -170,7 +170,7 @@ def test_report_reads_everything_from_the_store(caps_path: str, tmp_path: Path) 
     evaluate(NavigationConfig(caps_path, worlds=6, max_steps=300, record=4), out)
     evaluate(NavigationConfig(None, method="compass-guard", worlds=6, max_steps=300), out)
     report = write_report([out], tmp_path / "report")
-    text = report.read_text()
+    text = report.path.read_text()
     assert "| copi-faithful | 6 |" in text and "| compass-guard | 6 |" in text
     names = sorted(p.name for p in (tmp_path / "report").iterdir())
     assert "fig4_excess.png" in names and "fig3_copi_faithful.png" in names

@@ -85,9 +85,9 @@ def test_runner_store_and_fig5(caps_path: str, tmp_path: Path) -> None:
     with ResultsStore(out) as a, ResultsStore(one) as b:
         rows_a = [r for r in a.games() if r["method"] == "capability-dynamic"]
         rows_b = b.games()
-        assert [{k: v for k, v in r.items()} for r in rows_a] == rows_b
+        assert rows_a == rows_b
     report = write_report([out], tmp_path / "rep")
-    text = report.read_text()
+    text = report.path.read_text()
     assert "Experiment 2" in text and "capability-static" in text
     provenance = [ln for ln in text.splitlines() if ln.startswith("- **capability-")]
     assert len(provenance) == 2 and all("4 games, seed 0, evader capability" in ln

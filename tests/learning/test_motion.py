@@ -13,16 +13,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from copi.cli import main
+from copi.core import Observation, Task
 from copi.errors import CapabilitiesFormatError, InvalidArgumentError
-from copi.experiments._episode import run_agent
-from copi.experiments.methods import (
-    ABLATIONS,
-    check_preset_capabilities,
-    make_agent,
-    method_spec,
-    parse_methods,
-)
+from copi.experiments._episode import run_episode
+from copi.experiments.methods import ABLATIONS, make_agent, method_spec, parse_methods
 from copi.experiments.navigation import draw_episode
+from copi.experiments.presets import check_preset_capabilities
 from copi.learning import Capabilities, LearnParams, SymmetryGroup, learn, ring_operators
 from copi.learning._contexts import (
     MOTION_CLIP,
@@ -30,7 +26,7 @@ from copi.learning._contexts import (
     motion_contexts,
     previous_in_world,
 )
-from copi.online import ContextController, CopiAgent, LearntAgent, Observation, Task
+from copi.online import ContextController, CopiAgent, LearntAgent
 
 
 @pytest.fixture(scope="module")
@@ -158,10 +154,14 @@ def test_the_chain_and_the_presets_refuse_what_does_not_fit(moving, tmp_path, ca
         ContextController(moving)
     with pytest.raises(InvalidArgumentError, match="contexts that see motion"):
         CopiAgent(moving, guard=1.2)
-    with pytest.raises(InvalidArgumentError, match="learnt with contexts that see motion"):
+    with pytest.raises(InvalidArgumentError, match=(
+        r"was learnt for preset learnt-motion \(16 directions, safety priors, contexts that see "
+        r"motion\); preset learnt needs 16 directions, safety priors: learn it with copi learn "
+        r"--preset learnt, or run it with --preset learnt-motion"
+    )):  # fmt: skip
         check_preset_capabilities("learnt", moving)
     still = dataclasses.replace(moving, params={**moving.params, "motion": False})
-    with pytest.raises(InvalidArgumentError, match="learnt without contexts that see motion"):
+    with pytest.raises(InvalidArgumentError, match="was learnt for preset learnt "):
         check_preset_capabilities("learnt-motion", still)
     check_preset_capabilities("learnt-motion", moving)
     path = moving.save(tmp_path / "m.npz")
@@ -170,7 +170,6 @@ def test_the_chain_and_the_presets_refuse_what_does_not_fit(moving, tmp_path, ca
         ["learn", "-o", str(tmp_path / "x.npz"), "--motion"],
         ["evaluate", str(path), "-o", str(tmp_path / "r.sqlite"), "--method", "copi-learnt",
          "--worlds", "1"],
-        ["evaluate", str(path), "-o", str(tmp_path / "r.sqlite"), "--worlds", "1"],
         ["evaluate", str(path), "-o", str(tmp_path / "r.sqlite"), "--preset", "extended",
          "--worlds", "1"],
         ["pursuit", str(path), "-o", str(tmp_path / "g.sqlite"), "--preset", "learnt-motion",
@@ -186,9 +185,9 @@ def test_the_chain_and_the_presets_refuse_what_does_not_fit(moving, tmp_path, ca
 
 def test_the_ablations_are_named_and_run(moving, tmp_path) -> None:
     chosen = parse_methods("ablations")
-    names = [m for m, _ in chosen]
-    assert set(names) == set(ABLATIONS) and {lv for _, lv in chosen} == {"map", "sensor"}
-    assert "copi-learnt+motion" not in [m for m, _ in parse_methods(None)]
+    names = [r.method for r in chosen]
+    assert set(names) == set(ABLATIONS) and {r.sensing for r in chosen} == {"map", "sensor"}
+    assert "copi-learnt-motion" not in [r.method for r in parse_methods(None)]
     still = learn(LearnParams(worlds=6, steps=150, directions=16, safety=True, probe_worlds=8,
                               probe_steps=60))  # fmt: skip
     base = draw_episode("crowd", 0, 3)
@@ -198,11 +197,11 @@ def test_the_ablations_are_named_and_run(moving, tmp_path) -> None:
         caps = {"learnt": still, "learnt-motion": moving}.get(spec.capabilities or "")
         agent = make_agent(name, caps)
         sim = copy.deepcopy(base)
-        res = run_agent(agent, sim, sensing="map", max_steps=120)
+        res = run_episode(agent, sim, sensing="map", max_steps=120)
         runs[name] = (res.outcome, res.steps, round(res.path_length, 9))
-    assert isinstance(make_agent("copi-learnt+motion", moving), LearntAgent)
-    assert make_agent("copi-learnt+priors", still).beta > 0
-    assert make_agent("copi-learnt+persist", still).persist > 0
+    assert isinstance(make_agent("copi-learnt-motion", moving), LearntAgent)
+    assert make_agent("copi-learnt-priors", still).beta > 0
+    assert make_agent("copi-learnt-persist", still).persist > 0
     assert len(runs) == len(ABLATIONS)
     # in the benchmark, on the same episodes, paired against copi-learnt
     from copi.experiments.benchmark import BenchmarkConfig, run_benchmark
@@ -210,12 +209,13 @@ def test_the_ablations_are_named_and_run(moving, tmp_path) -> None:
 
     caps = {"learnt": str(still.save(tmp_path / "l.npz")),
             "learnt-motion": str(moving.save(tmp_path / "m.npz"))}  # fmt: skip
-    methods = tuple(parse_methods("copi-learnt@map,copi-learnt+motion@map,compass-guard@map"))
+    methods = tuple(parse_methods("copi-learnt@map,copi-learnt-motion@map,compass-guard@map"))
     cfg = BenchmarkConfig(methods=methods, families=("star",), episodes=3, capabilities=caps)
     run_benchmark(cfg, tmp_path / "a.sqlite", workers=1)
     text = write_benchmark_report(tmp_path / "a.sqlite", tmp_path / "rep").read_text()
-    assert "the method minus copi-learnt at the same level" in text
-    assert "| copi-learnt+motion | map |" in text and "| compass-guard | map |" in text
+    assert "**Reference: copi-learnt** (the default)" in text
+    assert "| copi-learnt-motion | map | route | 3 |" in text
+    assert "| compass-guard | map | route | 3 |" in text
 
 
 def test_contexts_of_another_shape_than_the_sensor_gives_are_refused(moving, tmp_path, capsys):

@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 
 from copi.baselines import CompassGuard
 from copi.errors import CapabilitiesFormatError, InvalidArgumentError
-from copi.experiments._episode import run_agent
+from copi.experiments._episode import run_episode
 from copi.experiments.navigation import draw_episode
 from copi.learning import Capabilities, LearnParams, learn
 from copi.learning._safety import (
@@ -107,9 +107,9 @@ def test_with_nothing_learnt_it_is_compass_guard_step_for_step(learnt: Capabilit
         for k in range(6):
             base = draw_episode("polygon", k, 3)
             a, b = copy.deepcopy(base), copy.deepcopy(base)
-            ra = run_agent(LearntAgent(learnt, alpha=0.0, beta=0.0, wait=False, guard=1.05), a,
+            ra = run_episode(LearntAgent(learnt, alpha=0.0, beta=0.0, wait=False, guard=1.05), a,
                            sensing=level, max_steps=150)  # fmt: skip
-            rb = run_agent(CompassGuard(guard=1.05), b, sensing=level, max_steps=150)
+            rb = run_episode(CompassGuard(guard=1.05), b, sensing=level, max_steps=150)
             assert (ra.outcome, ra.steps, ra.path_length) == (rb.outcome, rb.steps, rb.path_length)
             assert np.array_equal(a.position, b.position)
 
@@ -120,7 +120,7 @@ def test_waiting_is_chosen_when_the_network_says_only_waiting_is_safe(learnt) ->
     net[1, 1, 0] = 8.0  # waiting safe
     model = SafetyModel(net, learnt.safety.template_safe, learnt.safety.template_counts)
     agent = LearntAgent(learnt, safety=model, alpha=1.0, wait=True)
-    from copi.online import Observation, Task
+    from copi.core import Observation, Task
 
     agent.reset(Task("sensor", 0.3, 0.5, 32, 10.0))
     v = agent.act(Observation(np.full(32, 10.0), np.array([5.0, 0.0])))
@@ -222,7 +222,7 @@ def test_a_policy_lasts_while_the_reading_stays_within_its_landmark(learnt) -> N
 
 
 def test_grown_contexts_follow_their_map_and_weights_are_checked(learnt) -> None:
-    from copi.online import Observation, Task
+    from copi.core import Observation, Task
 
     agent = LearntAgent(learnt, continual=True, grow_every=50, wait=False)
     agent.reset(Task("sensor", 0.3, 0.5, 32, 10.0))

@@ -14,7 +14,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from copi.errors import InvalidArgumentError
-from copi.experiments._episode import run_agent
+from copi.experiments._episode import run_episode
 from copi.experiments.methods import make_agent
 from copi.online import CausalMap, CausalMapFormatError, CausalStrategy, Steering
 from copi.online._causal_kernels import OFFSETS, plausible_options
@@ -223,7 +223,7 @@ def _trap() -> Simulator:
 def test_the_causal_strategy_gets_out_of_a_u_trap_with_no_map() -> None:
     length = route_length(U_TRAP, U_TRAP.start, TRAP_GOAL)
     sim = _trap()
-    out = run_agent(make_agent("compass-guard"), sim, sensing="sensor", max_steps=300,
+    out = run_episode(make_agent("compass-guard"), sim, sensing="sensor", max_steps=300,
                     strategy="causal")  # fmt: skip
     assert out.outcome == "success"
     assert out.path_length <= 1.6 * length
@@ -234,10 +234,10 @@ def test_a_life_in_the_u_trap_gets_better_and_keeps_its_map() -> None:
     # and what its options did, so its path is shorter; without a life it is not.
     agent = make_agent("compass-guard")
     origin = np.array(U_TRAP.start, dtype=float)
-    first = run_agent(agent, _trap(), sensing="sensor", max_steps=300, strategy="causal",
+    first = run_episode(agent, _trap(), sensing="sensor", max_steps=300, strategy="causal",
                       origin=origin)  # fmt: skip
     options = agent.steering.causal.map.n_options
-    second = run_agent(agent, _trap(), sensing="sensor", max_steps=300, strategy="causal",
+    second = run_episode(agent, _trap(), sensing="sensor", max_steps=300, strategy="causal",
                        origin=origin)  # fmt: skip
     assert first.outcome == second.outcome == "success"
     assert options > 0 and agent.steering.causal.map.n_options > options
@@ -247,13 +247,13 @@ def test_a_life_in_the_u_trap_gets_better_and_keeps_its_map() -> None:
 def test_a_saved_life_resumes(tmp_path: Path) -> None:
     agent = make_agent("compass-guard")
     origin = np.array(U_TRAP.start, dtype=float)
-    first = run_agent(agent, _trap(), sensing="sensor", max_steps=300, strategy="causal",
+    first = run_episode(agent, _trap(), sensing="sensor", max_steps=300, strategy="causal",
                       origin=origin)  # fmt: skip
     path = agent.steering.causal.save(tmp_path / "u.npz", world="u-trap")
     resumed = make_agent("compass-guard")
     resumed.steering = Steering()  # type: ignore[attr-defined]
     resumed.steering.causal = CausalStrategy.load(path, world="u-trap")
-    second = run_agent(resumed, _trap(), sensing="sensor", max_steps=300, strategy="causal",
+    second = run_episode(resumed, _trap(), sensing="sensor", max_steps=300, strategy="causal",
                        origin=origin)  # fmt: skip
     assert second.outcome == "success"
     assert second.path_length < 0.8 * first.path_length
@@ -299,7 +299,7 @@ def test_files_with_impossible_parameters_or_grids_are_refused(tmp_path: Path) -
 def test_a_resumed_life_keeps_its_learnt_walls(tmp_path: Path) -> None:
     agent = make_agent("compass-guard")
     origin = np.array(U_TRAP.start, dtype=float)
-    run_agent(agent, _trap(), sensing="sensor", max_steps=300, strategy="causal", origin=origin)
+    run_episode(agent, _trap(), sensing="sensor", max_steps=300, strategy="causal", origin=origin)
     causal = agent.steering.causal
     path = causal.save(tmp_path / "u.npz", world="u-trap")
     back = CausalStrategy.load(path, world="u-trap")

@@ -3,10 +3,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from copi.core import Observation
 from copi.errors import InvalidArgumentError
-from copi.experiments._episode import make_task, run_agent
+from copi.experiments._episode import make_task, run_episode
 from copi.experiments.methods import make_agent
-from copi.online import Mapping, Observation, Steering
+from copi.online import Mapping, Steering
 from copi.world import Simulator
 from tests.baselines._support import TRAP_GOAL, route_length
 from tests.common import U_TRAP
@@ -20,10 +21,10 @@ def _trap() -> Simulator:
 def test_mapping_gets_out_of_a_u_trap_with_no_map(name: str) -> None:
     # The goal lies behind the U's bottom: heading for it is a dead end, mapping is not.
     length = route_length(U_TRAP, U_TRAP.start, TRAP_GOAL)
-    greedy = run_agent(make_agent(name), _trap(), sensing="sensor", max_steps=300)
+    greedy = run_episode(make_agent(name), _trap(), sensing="sensor", max_steps=300)
     assert greedy.outcome == "timeout"
     sim = _trap()
-    mapped = run_agent(make_agent(name), sim, sensing="sensor", max_steps=300,
+    mapped = run_episode(make_agent(name), sim, sensing="sensor", max_steps=300,
                        strategy="mapping")  # fmt: skip
     assert mapped.outcome == "success"
     assert mapped.path_length <= 1.5 * length

@@ -7,8 +7,9 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
+from copi.core import Agent, Observation, Task
 from copi.geometry import ring_angles
-from copi.online import Observation, Steering, Task
+from copi.online import Steering
 
 __all__ = ["Steered", "hit_points", "segment_distance", "unit"]
 
@@ -51,7 +52,7 @@ def segment_distance(
     return np.sqrt(((points[:, None, :] - near) ** 2).sum(-1)).min(0)
 
 
-class Steered:
+class Steered(Agent):
     """A local method driven by :class:`Steering` (the route at ``map``, the goal at
     ``sensor``): subclasses turn (observation, desired direction, reach) into a velocity."""
 

@@ -9,8 +9,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from copi.baselines._common import Steered, segment_distance, unit
+from copi.core import Observation
 from copi.errors import InvalidArgumentError
-from copi.online import Observation
 
 __all__ = ["DWA"]
 
@@ -46,7 +46,7 @@ class DWA(Steered):
     def __init__(
         self,
         *,
-        margin: float = 0.3,
+        margin: float = 0.9,
         clearance_weight: float = 0.3,
         horizon: float = 2.0,
         headings: int = 32,

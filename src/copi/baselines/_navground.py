@@ -9,8 +9,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from copi.core import Agent, Observation, Task, check_sensing
 from copi.errors import CopiError, InvalidArgumentError
-from copi.online import Observation, Steering, Task, check_sensing
+from copi.online import Steering
 
 __all__ = ["NAVGROUND_BEHAVIORS", "NavgroundAgent", "NavgroundMissingError", "navground_available"]
 
@@ -31,7 +32,7 @@ def navground_available() -> bool:
     return True
 
 
-class NavgroundAgent:
+class NavgroundAgent(Agent):
     """One of navground's behaviours as an :class:`copi.online.Agent`.
 
     The behaviour is given an omnidirectional disc of copi's agent radius and speed 1, the
@@ -52,7 +53,7 @@ class NavgroundAgent:
 
     sensing = "oracle"
 
-    def __init__(self, behavior: str, *, safety_margin: float = 0.2, horizon: float = 5.0) -> None:
+    def __init__(self, behavior: str, *, safety_margin: float = 0.3, horizon: float = 5.0) -> None:
         if not navground_available():
             raise NavgroundMissingError(
                 "navground is not installed: pip install 'copi[peers]' (or navground) "

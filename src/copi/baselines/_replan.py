@@ -9,9 +9,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from copi.baselines._common import unit
+from copi.core import Agent, Observation, Task, check_sensing
 from copi.errors import CopiError, InvalidArgumentError
 from copi.geometry import move_discs
-from copi.online import Observation, Task, check_sensing
 from copi.planning import shortest_path
 
 __all__ = ["Replan"]
@@ -24,7 +24,7 @@ polygons whose edges touch the true circle, and a path along such an edge grazes
 corner exactly, where the simulator stops the agent."""
 
 
-class Replan:
+class Replan(Agent):
     """Follow the shortest path on the current snapshot, the moving obstacles frozen and
     inflated by ``inflate``; re-plan every ``every`` steps and whenever the next stretch
     of the path (``lookahead`` steps) meets an inflated obstacle. Level ``oracle`` (it

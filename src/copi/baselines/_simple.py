@@ -9,8 +9,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from copi.baselines._common import Steered, unit
+from copi.core import Observation, Task
 from copi.errors import InvalidArgumentError
-from copi.online import Observation, Task, _kernels
+from copi.online import _kernels
 
 __all__ = ["CompassGuard", "Straight"]
 
@@ -47,7 +48,7 @@ class CompassGuard(Steered):
 
     name = "compass-guard"
 
-    def __init__(self, *, guard: float = 1.2, directions: int = 16) -> None:
+    def __init__(self, *, guard: float = 1.05, directions: int = 16) -> None:
         if not (math.isfinite(guard) and guard > 0):
             raise InvalidArgumentError(f"guard must be a finite number > 0; got {guard!r}")
         if int(directions) != directions or directions < 1:

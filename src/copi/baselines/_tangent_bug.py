@@ -9,8 +9,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from copi.baselines._common import Steered, hit_points, segment_distance, unit
+from copi.core import Observation, Task
 from copi.errors import InvalidArgumentError
-from copi.online import Observation, Task
 
 __all__ = ["TangentBug"]
 
@@ -46,7 +46,7 @@ class TangentBug(Steered):
 
     name = "tangent-bug"
 
-    def __init__(self, *, margin: float = 0.3, follow: float = 1.2, jump: float = 1.0) -> None:
+    def __init__(self, *, margin: float = 0.5, follow: float = 1.0, jump: float = 1.0) -> None:
         for key, v in (("margin", margin), ("follow", follow), ("jump", jump)):
             if not (math.isfinite(v) and v > 0):
                 raise InvalidArgumentError(f"{key} must be a finite number > 0; got {v!r}")

@@ -8,8 +8,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from copi.baselines._common import Steered, hit_points, segment_distance, unit
+from copi.core import Observation, Task
 from copi.errors import InvalidArgumentError
-from copi.online import Observation, Task
 
 __all__ = ["VFH"]
 

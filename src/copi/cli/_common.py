@@ -221,6 +221,63 @@ def compiling_notice(kernels: Iterable[str] | None = None) -> None:
         )
 
 
+# -- options shared by several commands (defined once) ---------------------------------
+
+SCHEDULER_HELP = (
+    "Dask scheduler tcp://HOST:PORT instead of local processes; its workers must read the "
+    "input files (capabilities, worlds) at the same paths."
+)
+
+
+def seed_option(what: str = "the episodes") -> Any:
+    """``--seed``: an int in 0 .. 2**63 - 1 (what a results store keeps)."""
+    from copi._rng import MAX_SEED
+
+    return typer.Option("--seed", min=0, max=MAX_SEED, help=f"Seed of {what}.")
+
+
+Seed = Annotated[int, seed_option()]
+Workers = Annotated[int, typer.Option("--workers", min=1, max=512, help="Local processes.")]
+Scheduler = Annotated[str | None, typer.Option("--scheduler", help=SCHEDULER_HELP)]
+Preset = Annotated[
+    str | None,
+    typer.Option(
+        "--preset",
+        help="copi's mode: faithful (the paper's chain), extended, learnt or learnt-motion "
+        "(default: the mode the capabilities file was learnt for).",
+    ),
+]
+Method = Annotated[
+    str | None,
+    typer.Option("--method", help="A registered method (copi list names them); default: "
+                 "the preset's."),
+]  # fmt: skip
+SensorStrategy = Annotated[
+    str,
+    typer.Option("--sensor-strategy",
+                 help="Global strategy at level sensor: greedy, mapping or causal."),
+]  # fmt: skip
+Guard = Annotated[
+    float | None,
+    typer.Option("--guard", min=0.0,
+                 help="The hand-written guard of copi's modes and compass-guard (default: the "
+                 "method's); not with --preset, which sets it."),
+]  # fmt: skip
+
+
+def names_epilog() -> str:
+    """The registered methods, families and presets, for a command's --help (computed only
+    when help is asked for: the registry imports every method)."""
+    from copi.experiments.methods import method_names
+    from copi.experiments.presets import PRESETS
+    from copi.world import family_names
+
+    return (
+        f"Methods: {', '.join(method_names())}. Families: {', '.join(family_names())}. "
+        f"Presets: {', '.join(PRESETS)}."
+    )
+
+
 def safe_name(name: str) -> str:
     """A file name made from a world name."""
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("._") or "world"

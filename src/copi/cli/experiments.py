@@ -1,21 +1,31 @@
-"""``copi evaluate``, ``benchmark``, ``pursuit``, ``report``, ``reproduce``: experiments."""
+"""``copi evaluate``, ``benchmark``, ``pursuit``, ``lifelong``, ``report``, ``reproduce``,
+``list``: experiments. Thin: parse, check the outputs, call the library, print."""
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated
 
 import typer
 
 from copi._files import check_outputs
-from copi.cli._common import _with_progress, app, console, out, progress
-from copi.errors import CopiError
-
-_SCHEDULER_HELP = (
-    "Dask scheduler tcp://HOST:PORT instead; its workers must read the input files "
-    "(capabilities, worlds) at the same paths."
+from copi.cli._common import (
+    Guard,
+    Method,
+    Preset,
+    Scheduler,
+    Seed,
+    SensorStrategy,
+    Workers,
+    _with_progress,
+    app,
+    console,
+    out,
+    progress,
+    seed_option,
 )
+from copi.errors import CopiError
 
 
 def _resuming(
@@ -36,40 +46,36 @@ def _resuming(
     return call
 
 
+def _load_capabilities(path: Path | None):  # type: ignore[no-untyped-def]
+    if path is None:
+        return None
+    from copi.learning import Capabilities
+
+    return Capabilities.load(path)
+
+
 @app.command("evaluate")
 def evaluate_command(
     capabilities: Annotated[
         Path | None,
-        typer.Argument(help="Capabilities file (.npz); needed by copi's methods only."),
+        typer.Argument(help="Capabilities file (.npz); needed by copi's modes only."),
     ] = None,
     output: Annotated[
         Path | None, typer.Option("-o", "--output", help="Results file (SQLite).")
     ] = None,
-    method: Annotated[
-        str | None,
-        typer.Option("--method", help="copi-faithful (default), copi-extended or a baseline."),
-    ] = None,
-    preset: Annotated[
-        str | None,
-        typer.Option(
-            "--preset",
-            help="copi's mode: faithful, extended, learnt or learnt-motion (method, guard).",
-        ),
-    ] = None,
+    method: Method = None,
+    preset: Preset = None,
     worlds: Annotated[int, typer.Option("--worlds", min=1, help="Episodes (paper: 1549).")] = 1549,
-    family: Annotated[str, typer.Option("--family", help="World family.")] = "star",
+    family: Annotated[str, typer.Option("--family", help="World family (copi list).")] = "star",
     sensing: Annotated[str, typer.Option("--sensing", help="sensor, map or oracle.")] = "map",
     world_file: Annotated[
         Path | None, typer.Option("--world-file", help="Run these worlds instead of a family.")
     ] = None,
-    seed: Annotated[int, typer.Option("--seed", min=0, help="Seed of the episodes.")] = 0,
-    workers: Annotated[int, typer.Option("--workers", min=1, help="Local processes.")] = 1,
-    scheduler: Annotated[str | None, typer.Option("--scheduler", help=_SCHEDULER_HELP)] = None,
+    seed: Seed = 0,
+    workers: Workers = 1,
+    scheduler: Scheduler = None,
     max_steps: Annotated[int, typer.Option("--max-steps", min=1, help="Step limit.")] = 1000,
-    guard: Annotated[
-        float | None,
-        typer.Option("--guard", min=0.0, help="Guard of copi's methods (default: the method's)."),
-    ] = None,
+    guard: Guard = None,
     continual: Annotated[
         bool, typer.Option("--continual", help="Learn unfamiliar contexts online.")
     ] = False,
@@ -79,90 +85,60 @@ def evaluate_command(
             "--contact-continues", help="A contact does not end the episode (older behaviour)."
         ),
     ] = False,
-    sensor_strategy: Annotated[
-        str,
-        typer.Option(
-            "--sensor-strategy", help="Global strategy at level sensor: greedy or mapping."
-        ),
-    ] = "greedy",
+    sensor_strategy: SensorStrategy = "greedy",
 ) -> None:
     """Experiment 1 (paper §IV): reach goals in dynamic worlds never seen; each episode's
-    path is compared with the optimum on the stationary snapshot. Rerunning the same
+    path is compared with the optimum on the stationary snapshot. Without --method or
+    --preset, runs the mode the capabilities file was learnt for. Rerunning the same
     command resumes an interrupted run."""
     from copi.experiments.navigation import NavigationConfig, evaluate
-    from copi.experiments.report import summarize
+    from copi.experiments.presets import resolve
+    from copi.experiments.report import summarize, warnings_for
     from copi.experiments.store import ResultsStore
 
     if output is None:
         raise CopiError("evaluate needs -o/--output: the results file to write")
     check_outputs({"the results store": (output, "results")}, inputs=[capabilities, world_file])
-    method = _preset_method(preset, method, capabilities)
+    caps = _load_capabilities(capabilities)
+    chosen = resolve(preset_name=preset, method=method, capabilities=caps,
+                     where=str(capabilities), guard=guard)  # fmt: skip
     if world_file is not None:
         from copi.world import load_worlds
 
         load_worlds(world_file)  # a bad file is refused before anything is written
+    from copi.experiments.methods import method_spec
+
+    needs_caps = method_spec(chosen.method).capabilities is not None
     config = NavigationConfig(
-        capabilities=str(capabilities) if capabilities is not None else None,
-        method=method,
-        worlds=worlds,
-        family=family,
-        sensing=sensing,
-        world_file=str(world_file) if world_file is not None else None,
-        seed=seed,
-        max_steps=max_steps,
-        guard=guard,
-        continual=continual,
-        end_on_contact=not contact_continues,
-        sensor_strategy=sensor_strategy,
-    )
+        capabilities=str(capabilities) if capabilities is not None and needs_caps else None,
+        method=chosen.method, worlds=worlds, family=family, sensing=sensing,  # type: ignore[arg-type]
+        world_file=str(world_file) if world_file is not None else None, seed=seed,
+        max_steps=max_steps, guard=chosen.params.get("guard"), continual=continual,
+        end_on_contact=not contact_continues, sensor_strategy=sensor_strategy,
+    )  # fmt: skip
     output.parent.mkdir(parents=True, exist_ok=True)
     run_id = _with_progress(
-        f"{method}: episodes",
+        f"{chosen.method}: episodes",
         worlds,
-        lambda report: evaluate(
-            config,
-            output,
-            workers=workers,
-            scheduler=scheduler,
-            progress=_resuming(report, output, "episodes"),
-        ),  # fmt: skip
+        lambda report: evaluate(config, output, workers=workers, scheduler=scheduler,
+                                progress=_resuming(report, output, "episodes")),  # fmt: skip
     )
     with ResultsStore(output, readonly=True) as store:
         s = summarize(store.episodes(run_id))
     skipped = f", {s['skipped']} skipped (no valid task)" if s["skipped"] else ""
+    where = f"worlds of {world_file.name}" if world_file is not None else family
     if not s["episodes"]:
-        out.print(f"{output}: {method} ({sensing}): no episode ran{skipped}")
+        out.print(f"{output}: {chosen.method} ({sensing}, {where}): no episode ran{skipped}")
         return
     out.print(
-        f"{output}: {method} ({sensing}): {s['episodes']} episodes{skipped}, success "
-        f"{100 * s['success']:.1f} %, collision {100 * s['contact']:.1f} %, timeout "
+        f"{output}: {chosen.method} ({sensing}, {where}): {s['episodes']} episodes{skipped}, "
+        f"success {100 * s['success']:.1f} %, collision {100 * s['contact']:.1f} %, timeout "
         f"{100 * s['timeout']:.1f} %, median excess {100 * s['excess_median']:.1f} %, "
         f"standing still {100 * s['no_policy']:.1f} %, unfamiliar "
         f"{100 * s['unfamiliar']:.1f} %, {s['decisions_per_s']:,.0f} decisions/s"
     )
-    from copi.experiments.report import warnings_for
-
-    for w in warnings_for(method, s):
+    for w in warnings_for(chosen.method, s):
         console.print(f"copi: warning: {w}", highlight=False, markup=False)
-
-
-def _preset_method(preset: str | None, method: str | None, capabilities: Path | None) -> str:
-    """The method a ``--preset`` stands for (checked against ``--method`` and against how
-    the capabilities file was learnt); without a preset, ``method`` or copi-faithful."""
-    from copi.errors import InvalidArgumentError
-    from copi.experiments.methods import check_preset_capabilities
-    from copi.experiments.methods import preset as get_preset
-
-    if preset is None:
-        return method or "copi-faithful"
-    p = get_preset(preset)
-    if method is not None and method != p.method:
-        raise InvalidArgumentError(f"--method {method} contradicts --preset {preset} ({p.method})")
-    if capabilities is not None:
-        from copi.learning import Capabilities
-
-        check_preset_capabilities(preset, Capabilities.load(capabilities), str(capabilities))
-    return p.method
 
 
 @app.command("benchmark")
@@ -172,29 +148,36 @@ def benchmark_command(
         bool, typer.Option("--quick", help="30 episodes per family (a few minutes).")
     ] = False,
     families: Annotated[
-        str | None, typer.Option("--families", help="Comma-separated families (default: all).")
+        str | None,
+        typer.Option("--families", help="Comma-separated families (default: copi's five)."),
+    ] = None,
+    world_file: Annotated[
+        Path | None,
+        typer.Option("--world-file", help="Run the episodes in these worlds instead of the "
+                     "families (episode k in world k mod n)."),
     ] = None,
     methods: Annotated[
         str | None,
-        typer.Option("--methods", help="Comma-separated methods, name or name@level."),
+        typer.Option("--methods", help="Comma-separated arms NAME[@LEVEL][:STRATEGY] "
+                     "(e.g. dwa@sensor:mapping); 'ablations' for the learnt preset's."),
+    ] = None,
+    against: Annotated[
+        str | None,
+        typer.Option("--against", help="The method every row is paired against (default: "
+                     "copi-learnt, else the first method run)."),
     ] = None,
     episodes: Annotated[
         int | None, typer.Option("--episodes", min=1, help="Episodes per family (1000).")
     ] = None,
-    seed: Annotated[int, typer.Option("--seed", min=0, help="Seed of the episodes.")] = 0,
-    workers: Annotated[int, typer.Option("--workers", min=1, help="Local processes.")] = 2,
-    scheduler: Annotated[str | None, typer.Option("--scheduler", help=_SCHEDULER_HELP)] = None,
-    sensor_strategy: Annotated[
-        str,
-        typer.Option(
-            "--sensor-strategy", help="Global strategy at level sensor: greedy or mapping."
-        ),
-    ] = "greedy",
+    seed: Seed = 0,
+    workers: Workers = 2,
+    scheduler: Scheduler = None,
+    sensor_strategy: SensorStrategy = "greedy",
 ) -> None:
-    """Every method at its sensing levels on the same episodes of every world family, into
-    DIR/benchmark.sqlite (resumable), with DIR/benchmark.md: a table per family, paired
-    differences against copi with 95 % bootstrap intervals, and a figure."""
-    from copi.baselines import navground_available
+    """Every method at its sensing levels on the same episodes of every world family (or
+    of a world file), into DIR/benchmark.sqlite (resumable), with DIR/benchmark.md: a
+    table per family, paired differences against a reference method with 95 % bootstrap
+    intervals, and a figure."""
     from copi.experiments.benchmark import (
         BENCHMARK_FAMILIES,
         BenchmarkConfig,
@@ -203,64 +186,70 @@ def benchmark_command(
     )
     from copi.experiments.benchmark_report import write_benchmark_report
     from copi.experiments.methods import method_spec, parse_methods
-    from copi.online import check_strategy
-    from copi.world import check_family
+    from copi.world import check_family, family_inputs
 
+    if world_file is not None and families is not None:
+        raise CopiError("--world-file and --families do not go together: the world file's "
+                        "worlds replace the families")  # fmt: skip
     fams = (
         BENCHMARK_FAMILIES
         if families is None
-        else tuple(f.strip() for f in families.split(",") if f.strip())
+        else tuple(dict.fromkeys(f.strip() for f in families.split(",") if f.strip()))
     )
     for f in fams:
         check_family(f)
-    check_strategy(sensor_strategy)
-    chosen = parse_methods(methods)
-    if methods is None and not navground_available():
+    chosen = parse_methods(methods, strategy=sensor_strategy)
+    missing = [r for r in chosen if not method_spec(r.method).available()]
+    if methods is None and missing:
         console.print(
-            "copi: navground is not installed: its peers are left out "
-            "(pip install 'copi[peers]' to include them)",
-            highlight=False,
-        )
-        chosen = [m for m in chosen if method_spec(m[0]).available]
-    for m, _ in chosen:
-        if not method_spec(m).available:
-            raise CopiError(
-                f"{m} needs navground, which is not installed: pip install 'copi[peers]'"
-            )
+            "copi: " + ", ".join(sorted({r.method for r in missing})) + " left out: their "
+            "optional extras are not installed (pip install 'copi[peers]')", highlight=False,
+        )  # fmt: skip
+        chosen = [r for r in chosen if method_spec(r.method).available()]
+    for r in chosen:
+        spec = method_spec(r.method)
+        if not spec.available():
+            raise CopiError(f"{r.method} needs the optional extra {spec.requires!r}, which is "
+                            f"not installed: pip install 'copi[{spec.requires}]'")  # fmt: skip
+    if against is not None:
+        method_spec(against)
+        if against not in {r.method for r in chosen}:
+            raise CopiError(f"--against {against}: it is not among the methods run "
+                            f"({', '.join(dict.fromkeys(r.method for r in chosen))})")  # fmt: skip
     n = episodes if episodes is not None else (30 if quick else 1000)
     check_outputs(
         {"the benchmark's directory": (output, "directory"),
          "the results store": (output / "benchmark.sqlite", "results"),
          "the report": (output / "benchmark.md", "text")},
+        inputs=[world_file],
     )  # fmt: skip
-    if "maps" in fams:
-        from copi.world import movingai_dir
+    if world_file is not None:
+        from copi.experiments.navigation import check_world_file
 
-        movingai_dir()  # refuse a missing data directory before anything is written
+        check_world_file(world_file)  # a bad file is refused before anything is written
+    else:
+        for f in fams:
+            family_inputs(f)  # a family's missing data is refused before anything is written
+    presets = {p for r in chosen if (p := method_spec(r.method).capabilities) is not None}
+    config = BenchmarkConfig(
+        methods=tuple(chosen), families=tuple(fams), episodes=n, seed=seed,
+        world_file=None if world_file is None else str(world_file),
+        capabilities={p: str(output / f"capabilities-{p}.npz") for p in presets},
+    )  # fmt: skip
     output.mkdir(parents=True, exist_ok=True)
-    presets = {p for m, _ in chosen if (p := method_spec(m).capabilities) is not None}
     with progress() as bar:
         task = bar.add_task("learn capabilities", total=len(presets))
-        caps = ensure_capabilities(output, presets, seed=seed)
+        ensure_capabilities(output, presets, seed=seed)
         bar.update(task, completed=len(presets))
-    config = BenchmarkConfig(
-        methods=tuple(chosen), families=tuple(fams), episodes=n, seed=seed, capabilities=caps,
-        sensor_strategy=sensor_strategy,
-    )  # fmt: skip
     results = output / "benchmark.sqlite"
-    total = n * len(fams) * len(chosen)
+    total = n * len(config.groups) * len(chosen)
     _with_progress(
         "benchmark: episodes",
         total,
-        lambda report: run_benchmark(
-            config,
-            results,
-            workers=workers,
-            scheduler=scheduler,
-            progress=_resuming(report, results, "episodes"),
-        ),  # fmt: skip
-    )
-    report = write_benchmark_report(results, output)
+        lambda report: run_benchmark(config, results, workers=workers, scheduler=scheduler,
+                                     progress=_resuming(report, results, "episodes")),
+    )  # fmt: skip
+    report = write_benchmark_report(results, output, against=against)
     out.print(report.read_text(encoding="utf-8").split("![")[0])
     out.print(str(report))
 
@@ -274,23 +263,17 @@ def pursuit_command(
         bool, typer.Option("--dynamic/--static", help="With or without moving obstacles.")
     ] = True,
     evader: Annotated[
-        str,
-        typer.Option("--evader", help="capability (through the capabilities), learnt (through "
-                     "the learnt preset's agent) or game."),
-    ] = "capability",
-    seed: Annotated[int, typer.Option("--seed", min=0, help="Seed of the games.")] = 0,
-    horizon: Annotated[int, typer.Option("--horizon", min=1, help="Steps to survive.")] = 300,
-    workers: Annotated[int, typer.Option("--workers", min=1, help="Local processes.")] = 1,
-    scheduler: Annotated[str | None, typer.Option("--scheduler", help=_SCHEDULER_HELP)] = None,
-    guard: Annotated[
-        float | None,
-        typer.Option("--guard", min=0.0, help="The capability evader's guard (default 1.2)."),
-    ] = None,
-    preset: Annotated[
         str | None,
-        typer.Option("--preset", help="copi's mode: faithful, extended (set the guard) or "
-                     "learnt (the learnt evader and its guard)."),
+        typer.Option("--evader", help="capability (through the capability chain), learnt "
+                     "(through the learnt preset's agent) or game (the game's direction "
+                     "itself); default: the capabilities' mode."),
     ] = None,
+    seed: Annotated[int, seed_option("the games")] = 0,
+    horizon: Annotated[int, typer.Option("--horizon", min=1, help="Steps to survive.")] = 300,
+    workers: Workers = 1,
+    scheduler: Scheduler = None,
+    guard: Guard = None,
+    preset: Preset = None,
     contact_continues: Annotated[
         bool,
         typer.Option("--contact-continues", help="A contact does not end the game (older rule)."),
@@ -299,53 +282,24 @@ def pursuit_command(
     """Experiment 2 (paper §IV, Fig. 5): the homicidal chauffeur. A faster car with a
     turn radius chases the agent; the agent plays the game's strategy through its
     capabilities (or, with --evader game, directly). Resumable, like evaluate."""
-    from copi.errors import InvalidArgumentError
-    from copi.experiments.methods import check_preset_capabilities
-    from copi.experiments.pursuit import PursuitConfig, pursue
+    from copi.experiments.pursuit import PursuitConfig, pursue, resolve_evader
     from copi.experiments.report import summarize_games
     from copi.experiments.store import ResultsStore
-    from copi.learning import Capabilities
 
-    if preset is not None:
-        from copi.experiments.methods import preset as get_preset
-
-        if preset == "learnt-motion":
-            raise InvalidArgumentError(
-                "the pursuit game plays presets faithful, extended and learnt; got learnt-motion"
-            )
-        want = get_preset(preset).guard
-        check_preset_capabilities(preset, Capabilities.load(capabilities), str(capabilities))
-        if guard is not None and guard != want:
-            raise InvalidArgumentError(f"--guard {guard} contradicts --preset {preset} ({want})")
-        guard = want
-        if preset == "learnt":
-            if evader == "game":
-                raise InvalidArgumentError(
-                    "--evader game plays no capabilities; --preset learnt sets the learnt evader"
-                )
-            evader = "learnt"
-        elif evader == "learnt":
-            raise InvalidArgumentError(f"--evader learnt needs --preset learnt, not {preset}")
-    elif evader == "learnt":
-        check_preset_capabilities("learnt", Capabilities.load(capabilities), str(capabilities))
-        guard = 1.05 if guard is None else guard
-    guard = 1.2 if guard is None else guard
     check_outputs({"the results store": (output, "results")}, inputs=[capabilities])
+    caps = _load_capabilities(capabilities)
+    kind, chosen_guard = resolve_evader(caps, str(capabilities), preset=preset, evader=evader,
+                                        guard=guard)  # fmt: skip
     config = PursuitConfig(
-        capabilities=str(capabilities), evader=evader, dynamic=dynamic, games=games,
-        seed=seed, horizon=horizon, guard=guard, contact_ends=not contact_continues,
+        capabilities=str(capabilities), evader=kind, dynamic=dynamic, games=games,
+        seed=seed, horizon=horizon, guard=chosen_guard, contact_ends=not contact_continues,
     )  # fmt: skip
     output.parent.mkdir(parents=True, exist_ok=True)
     run_id = _with_progress(
         f"{config.method}: games",
         games,
-        lambda report: pursue(
-            config,
-            output,
-            workers=workers,
-            scheduler=scheduler,
-            progress=_resuming(report, output, "games"),
-        ),  # fmt: skip
+        lambda report: pursue(config, output, workers=workers, scheduler=scheduler,
+                              progress=_resuming(report, output, "games")),  # fmt: skip
     )
     with ResultsStore(output, readonly=True) as store:
         s = summarize_games(store.games(run_id))
@@ -367,11 +321,14 @@ def lifelong_command(
     worlds: Annotated[int, typer.Option("--worlds", min=1, help="Worlds (lives).")] = 20,
     tasks: Annotated[int, typer.Option("--tasks", min=1, help="Tasks in each life.")] = 50,
     methods: Annotated[
-        str | None, typer.Option("--methods", help="Comma-separated methods (default: all).")
+        str | None,
+        typer.Option("--methods", help="Comma-separated arms NAME[@LEVEL][:STRATEGY] "
+                     "(default: all six; a name alone: at sensor, causal for copi's modes, "
+                     "mapping for the others)."),
     ] = None,
-    seed: Annotated[int, typer.Option("--seed", min=0, help="Seed of the worlds and tasks.")] = 0,
-    workers: Annotated[int, typer.Option("--workers", min=1, help="Local processes.")] = 2,
-    scheduler: Annotated[str | None, typer.Option("--scheduler", help=_SCHEDULER_HELP)] = None,
+    seed: Annotated[int, seed_option("the worlds and tasks")] = 0,
+    workers: Workers = 2,
+    scheduler: Scheduler = None,
     maps: Annotated[
         Path | None,
         typer.Option("--maps", help="Directory to save each life's causal map in (.npz)."),
@@ -389,20 +346,18 @@ def lifelong_command(
     life, paired differences with 95 % intervals, and the goals measured."""
     from copi.experiments.lifelong import LifelongConfig, parse_lifelong_methods, run_lifelong
     from copi.experiments.lifelong_report import lifelong_report_paths, write_lifelong_report
-    from copi.world import check_family
+    from copi.world import check_family, family_inputs
 
     check_family(family)
     chosen = parse_lifelong_methods(methods)
     report_path, figure_path = lifelong_report_paths(output)
     check_outputs(
         {"the results store": (output, "results"), "the report": (report_path, "text"),
-         "the report's figure": (figure_path, "png")},
+         "the report's figure": (figure_path, "png")}
+        | ({} if maps is None else {"the maps' directory": (maps, "directory")}),
         inputs=[capabilities],
     )  # fmt: skip
-    if family == "maps":
-        from copi.world import movingai_dir
-
-        movingai_dir()  # refuse a missing data directory before anything is written
+    family_inputs(family)  # a family's missing data is refused before anything is written
     config = LifelongConfig(
         capabilities=str(capabilities), family=family, worlds=worlds, tasks=tasks, seed=seed,
         methods=chosen, maps=None if maps is None else str(maps),
@@ -413,10 +368,8 @@ def lifelong_command(
     _with_progress(
         "lifelong: lives",
         worlds * len(chosen),
-        lambda report: run_lifelong(
-            config, output, workers=workers, scheduler=scheduler,
-            progress=_resuming(report, output, "lives"),
-        ),  # fmt: skip
+        lambda report: run_lifelong(config, output, workers=workers, scheduler=scheduler,
+                                    progress=_resuming(report, output, "lives")),  # fmt: skip
     )
     report = write_lifelong_report(output, report_path)
     out.print(report.read_text(encoding="utf-8").split("![")[0])
@@ -428,7 +381,8 @@ def report_command(
     results: Annotated[list[Path], typer.Argument(help="Results files (SQLite).")],
     output: Annotated[Path, typer.Option("-o", "--output", help="Directory for the report.")],
 ) -> None:
-    """Write report.md with the summary table and the paper's Fig. 3 and Fig. 4."""
+    """Write report.md with the summary tables and the paper's Fig. 3, 4 and 5 (and
+    Experiment 3's report where the files hold lives)."""
     from copi.errors import InvalidArgumentError
     from copi.experiments.report import write_report
     from copi.experiments.store import ResultsStore
@@ -442,8 +396,8 @@ def report_command(
          "the report": (output / "report.md", "text")},
         inputs=results,
     )  # fmt: skip
-    path = write_report([str(r) for r in results], output)
-    out.print(str(path))
+    report = write_report([str(r) for r in results], output)
+    out.print(str(report.path))
 
 
 @app.command("reproduce")
@@ -452,128 +406,57 @@ def reproduce_command(
     quick: Annotated[
         bool, typer.Option("--quick", help="A small run (100 episodes) to try things out.")
     ] = False,
-    workers: Annotated[int, typer.Option("--workers", min=1, help="Local processes.")] = 2,
-    seed: Annotated[int, typer.Option("--seed", min=0, help="Seed of learning and episodes.")] = 0,
+    workers: Workers = 2,
+    seed: Annotated[int, seed_option("learning and episodes")] = 0,
 ) -> None:
     """The paper's experiments end to end: learn capabilities (100 worlds x 300 steps),
-    Experiment 1 on 1549 dynamic worlds in the faithful mode (4 directions, the paper's
-    chain) and the extended mode (16 directions, candidates checked against the live
-    reading with a guard of 1.2: the agent radius, an obstacle's step and a margin),
-    Experiment 2 (200
-    homicidal-chauffeur games, stationary and dynamic, capability and game evaders), the
-    benchmark, Experiment 3 (lifelong: 20 indoor worlds of 50 tasks), and the report."""
-    from copi.experiments.store import ResultsError
+    Experiment 1 on 1549 dynamic worlds in the faithful mode (the paper's chain) and the
+    extended mode, Experiment 2 (homicidal-chauffeur games), the benchmark's quick
+    version, Experiment 3 (lifelong), and the reports."""
+    from copi.experiments.reproduce import reproduce
 
-    output.mkdir(parents=True, exist_ok=True)
-    try:
-        _reproduce(output, quick, workers, seed)
-    except ResultsError as exc:
-        if "different configuration" not in str(exc):
-            raise
-        other = "a full" if quick else "a --quick"
-        raise CopiError(
-            f"{output} holds results of {other} run or of other settings; reproduce into "
-            f"another directory (-o), or delete {output} to start over"
-        ) from None
-
-
-def _reproduce(output: Path, quick: bool, workers: int, seed: int) -> None:
-    from copi.experiments.benchmark import ensure_capabilities
-    from copi.experiments.navigation import NavigationConfig, evaluate
-    from copi.experiments.pursuit import PursuitConfig, pursue
-    from copi.experiments.report import write_report
-
-    episodes = 100 if quick else 1549
-    results = output / "experiment1.sqlite"
-    from copi.experiments.methods import PRESETS
-
-    modes = [(name, PRESETS[name].guard) for name in ("faithful", "extended")]
+    check_outputs(
+        {"the directory": (output, "directory"),
+         "the report": (output / "report.md", "text"),
+         "the benchmark's report": (output / "benchmark.md", "text"),
+         "the results": (output / "experiment1.sqlite", "results"),
+         "the benchmark's results": (output / "benchmark.sqlite", "results")},
+    )  # fmt: skip
     with progress() as bar:
-        for name, guard in modes:
-            bar_task = bar.add_task(f"learn ({name})", total=1)
-            caps_path = Path(ensure_capabilities(output, {name}, seed=seed)[name])
-            bar.update(bar_task, completed=1)
-            eval_task = bar.add_task(f"evaluate ({name})", total=episodes)
 
-            def advance(done: int, total: int, task: Any = eval_task) -> None:
-                bar.update(task, completed=done)
+        def task(label: str, total: int) -> Callable[[int, int], None]:
+            tid = bar.add_task(label, total=total)
+            return lambda done, _total: bar.update(tid, completed=done)
 
-            config = NavigationConfig(
-                capabilities=str(caps_path),
-                method=f"copi-{name}",
-                worlds=episodes,
-                seed=seed,
-                guard=guard,
-            )
-            evaluate(
-                config, results, workers=workers,
-                progress=_resuming(advance, results, "episodes"),
-            )  # fmt: skip
-        caps_path = output / "capabilities-extended.npz"
-        for kind in ("capability", "game"):
-            for dynamic in (False, True):
-                game_cfg = PursuitConfig(
-                    capabilities=str(caps_path), evader=kind, dynamic=dynamic,
-                    games=20 if quick else 200, seed=seed,
-                )  # fmt: skip
-                game_task = bar.add_task(f"pursuit ({game_cfg.method})", total=game_cfg.games)
+        done = reproduce(output, quick=quick, workers=workers, seed=seed, tasks=task)
+    for text in done.summaries.values():
+        out.print(text + "\n")
+    out.print(str(done.report))
+    out.print(str(done.benchmark))
 
-                def advance_games(done: int, total: int, task: Any = game_task) -> None:
-                    bar.update(task, completed=done)
 
-                pursue(
-                    game_cfg, results, workers=workers,
-                    progress=_resuming(advance_games, results, "games"),
-                )  # fmt: skip
-        # The benchmark's quick version: every method on the same episodes of every family.
-        from copi.baselines import navground_available
-        from copi.experiments.benchmark import BENCHMARK_FAMILIES, BenchmarkConfig, run_benchmark
-        from copi.experiments.benchmark_report import write_benchmark_report
-        from copi.experiments.methods import method_spec, parse_methods
+@app.command("list")
+def list_command() -> None:
+    """The registered methods (what each needs and is), world families and presets,
+    copi's and those other packages add through their entry points."""
+    from rich.table import Table
 
-        chosen = [m for m in parse_methods(None) if method_spec(m[0]).available]
-        if not navground_available():
-            console.print("copi: navground is not installed: its peers are left out of the "
-                          "benchmark (pip install 'copi[peers]')", highlight=False)  # fmt: skip
-        bench = BenchmarkConfig(
-            methods=tuple(chosen), families=BENCHMARK_FAMILIES, episodes=10 if quick else 30,
-            seed=seed, capabilities=ensure_capabilities(
-                output, {p for m, _ in chosen if (p := method_spec(m).capabilities)}, seed=seed
-            ),
-        )  # fmt: skip
-        bench_task = bar.add_task(
-            "benchmark (quick)", total=bench.episodes * len(chosen) * len(BENCHMARK_FAMILIES)
-        )
+    from copi.experiments.methods import method_names, method_spec
+    from copi.experiments.presets import PRESETS
+    from copi.world import family_names, family_spec
 
-        def advance_bench(done: int, total: int, task: Any = bench_task) -> None:
-            bar.update(task, completed=done)
-
-        bench_out = output / "benchmark.sqlite"
-        run_benchmark(
-            bench, bench_out, workers=workers,
-            progress=_resuming(advance_bench, bench_out, "episodes"),
-        )  # fmt: skip
-        # Experiment 3, lifelong (quick: 2 worlds of 10 tasks).
-        from copi.experiments.lifelong import LifelongConfig, run_lifelong
-
-        life = LifelongConfig(
-            ensure_capabilities(output, {"learnt"}, seed=seed)["learnt"], family="indoor",
-            worlds=2 if quick else 20, tasks=10 if quick else 50, seed=seed,
-        )  # fmt: skip
-        life_task = bar.add_task("lifelong (lives)", total=life.worlds * len(life.methods))
-
-        def advance_lives(done: int, total: int, task: Any = life_task) -> None:
-            bar.update(task, completed=done)
-
-        run_lifelong(life, results, workers=workers,
-                     progress=_resuming(advance_lives, results, "lives"))  # fmt: skip
-    write_benchmark_report(output / "benchmark.sqlite", output)
-    report = write_report([str(results)], output)
-    text = report.read_text(encoding="utf-8")
-    out.print(text.split("Runs:")[0])
-    if "# Experiment 2" in text:
-        out.print("# Experiment 2" + text.split("# Experiment 2")[1].split("![")[0])
-    if "# Experiment 3" in text:
-        out.print("# Experiment 3" + text.split("# Experiment 3")[1].split("![")[0])
-    out.print(str(report))
-    out.print(str(output / "benchmark.md"))
+    table = Table("method", "needs", "levels", "extra", "what it is", title="methods")
+    for name in method_names():
+        spec = method_spec(name)
+        extra = "" if spec.requires is None else (
+            spec.requires + ("" if spec.available() else " (not installed)"))  # fmt: skip
+        table.add_row(name, spec.sensing, ", ".join(spec.levels), extra, spec.summary)
+    out.print(table)
+    fams = Table("family", "what it is", title="world families")
+    for name in family_names():
+        fams.add_row(name, family_spec(name).summary)
+    out.print(fams)
+    presets = Table("preset", "method", "what it is", title="presets (copi learn --preset)")
+    for name, p in PRESETS.items():
+        presets.add_row(name, p.method, p.summary)
+    out.print(presets)

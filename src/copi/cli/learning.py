@@ -9,7 +9,7 @@ import typer
 from rich.table import Table
 
 from copi._files import check_outputs
-from copi.cli._common import app, out, progress
+from copi.cli._common import app, out, progress, seed_option
 
 
 @app.command("learn")
@@ -21,7 +21,7 @@ def learn_command(
     steps: Annotated[
         int, typer.Option("--steps", min=1, help="Random-walk steps per world.")
     ] = 300,
-    seed: Annotated[int, typer.Option("--seed", min=0, help="Seed of exploration and map.")] = 0,
+    seed: Annotated[int, seed_option("the exploration and the map")] = 0,
     max_nodes: Annotated[
         int | None, typer.Option("--max-nodes", min=2, help="Cap on the context map's nodes.")
     ] = None,
@@ -33,7 +33,8 @@ def learn_command(
     ] = None,
     directions: Annotated[
         int | None,
-        typer.Option("--directions", help="Policies per template: 4, 8 or 16 (default 4)."),
+        typer.Option("--directions", help="Policies per template: 4, 8 or 16 (default: the "
+                     "preset's)."),
     ] = None,
     learner: Annotated[
         str, typer.Option("--learner", help="astar (the paper's) or value-iteration.")
@@ -47,25 +48,30 @@ def learn_command(
         str | None,
         typer.Option(
             "--preset",
-            help="Learn for a mode: faithful (4 directions), extended (16), learnt, "
-            "learnt-motion.",
+            help="Learn for a mode: learnt (the default: 16 directions and safety priors), "
+            "faithful (the paper's: 4 directions), extended (16), learnt-motion.",
         ),
     ] = None,
     motion: Annotated[
         bool,
         typer.Option(
             "--motion",
-            help="Contexts that see motion: [reading, its change] (--preset learnt-motion).",
+            help="Contexts that see motion: the reading and its change (as --preset "
+            "learnt-motion).",
         ),
     ] = False,
 ) -> None:
     """Learn capabilities offline, without any task (paper §II): explore, grow the
     context map, skeletonise it into landmarks, reduce them by symmetry, learn local
-    policies."""
+    policies. Without --preset (or --directions), learns the default preset, learnt;
+    --preset faithful learns the paper's."""
     from copi.errors import InvalidArgumentError
-    from copi.experiments.methods import preset as get_preset
+    from copi.experiments.presets import DEFAULT_PRESET
+    from copi.experiments.presets import preset as get_preset
     from copi.learning import LearnParams, learn
 
+    if preset is None and directions is None and not motion:
+        preset = DEFAULT_PRESET
     if preset is not None:
         want = get_preset(preset).learn.directions
         if directions is not None and directions != want:

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+from copi.experiments._episode import EpisodeOutcome, make_task, optimal_to_goal, run_episode
 from copi.experiments.demo import random_walk_episodes
 from copi.experiments.executor import ExecutorError, InlineExecutor, make_executor
 from copi.experiments.figures import (
@@ -15,14 +16,15 @@ from copi.experiments.navigation import (
     EpisodeResult,
     NavigationConfig,
     evaluate,
-    run_episode,
-    run_episodes,
+    evaluate_episode,
+    evaluate_episodes,
 )
 from copi.experiments.pursuit import GameRow, PursuitConfig, pursue, run_game, run_games
 from copi.experiments.report import summarize, summarize_games, write_report
 from copi.experiments.store import ResultsError, ResultsStore
 
 __all__ = [
+    "EpisodeOutcome",
     "EpisodeResult",
     "ExecutorError",
     "GameRow",
@@ -32,11 +34,14 @@ __all__ = [
     "ResultsError",
     "ResultsStore",
     "evaluate",
+    "evaluate_episode",
+    "evaluate_episodes",
     "make_executor",
+    "make_task",
+    "optimal_to_goal",
     "pursue",
     "random_walk_episodes",
     "run_episode",
-    "run_episodes",
     "run_game",
     "run_games",
     "save_episode_gif",

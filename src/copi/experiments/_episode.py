@@ -11,12 +11,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from copi.errors import CopiError
-from copi.online import Agent, Observation, Task, check_sensing
+from copi.core import Agent, Observation, Sensing, Task, check_sensing
+from copi.errors import CopiError, InvalidArgumentError
 from copi.planning import length_error_bound, shortest_path
 from copi.world import Simulator
 
-__all__ = ["EpisodeOutcome", "optimal_to_goal", "run_agent"]
+__all__ = ["EpisodeOutcome", "make_task", "optimal_to_goal", "run_episode"]
 
 @dataclass(frozen=True)
 class EpisodeOutcome:
@@ -70,7 +70,7 @@ def optimal_to_goal(sim: Simulator, *, quad_segs: int = 16) -> float:
 
 
 def make_task(
-    sim: Simulator, sensing: str, strategy: str = "greedy", *, lifelong: bool = False
+    sim: Simulator, sensing: Sensing, strategy: str = "greedy", *, lifelong: bool = False
 ) -> Task:
     """The task as a method at ``sensing`` is told it (``strategy``: the global strategy
     at level ``sensor``; ``lifelong``: one of a life's tasks, see :class:`Task`)."""
@@ -89,11 +89,11 @@ def make_task(
     )
 
 
-def run_agent(
+def run_episode(
     agent: Agent,
     sim: Simulator,
     *,
-    sensing: str,
+    sensing: Sensing,
     max_steps: int,
     end_on_contact: bool = True,
     strategy: str = "greedy",
@@ -107,8 +107,24 @@ def run_agent(
     ``strategy`` is the global strategy every method uses at level ``sensor``.
     ``origin``: in a lifelong run, where the agent's life began (its odometry is its
     position less ``origin``, and it may keep what it learnt from earlier tasks).
-    When the episode ends, an agent with a ``finish`` method is told its outcome.
+    When the episode ends, the agent is told its outcome (:meth:`Agent.finish`) and
+    asked for its counters.
+
+    Examples
+    --------
+    >>> from copi.baselines import Straight
+    >>> from copi.world import ObstacleSpec, Simulator, World
+    >>> room = World([[0, 0], [20, 0], [20, 20], [0, 20]], start=[2, 2], goal=[12, 2])
+    >>> sim = Simulator.from_world(room, 0, obstacles=ObstacleSpec(count=(0, 0)))
+    >>> out = run_episode(Straight(), sim, sensing="sensor", max_steps=50)
+    >>> out.outcome, out.steps
+    ('success', 10)
     """
+    if not isinstance(agent, Agent):
+        raise InvalidArgumentError(
+            f"{type(agent).__name__} is not a copi.core.Agent: subclass it (reset and act; "
+            "finish and counters are optional)"
+        )
     rank = check_sensing(sensing, agent.sensing, method=agent.name)
     world = sim.world
     sensor = sim.sensor
@@ -172,10 +188,8 @@ def run_agent(
         outcome = "success"
     else:
         outcome = "timeout"
-    finish = getattr(agent, "finish", None)
-    if finish is not None:
-        finish(outcome)
-    counters = agent.counters() if hasattr(agent, "counters") else {}
+    agent.finish(outcome)
+    counters = agent.counters()
     return EpisodeOutcome(
         outcome=outcome,
         reached=reached,

@@ -1,5 +1,6 @@
-"""What Experiment 1 and 2 runs share: identity from their configuration, and running
-their independent, seeded items (episodes, games) into a results store."""
+"""What every experiment shares: a run's identity from its configuration, and the one
+loop that runs independent, seeded items (episodes, games, lives) into a results store
+(:func:`run_series`)."""
 
 from __future__ import annotations
 
@@ -10,12 +11,21 @@ import os
 from collections.abc import Callable, Iterator
 from concurrent.futures import as_completed
 from contextlib import AbstractContextManager, contextmanager
+from dataclasses import dataclass
 from typing import Any
 
-from copi.errors import Interrupted, ResultsError
+from copi.errors import Interrupted, InvalidArgumentError, ResultsError
 from copi.learning import Capabilities
 
-__all__ = ["RunIdentity", "execute", "run_into_store", "stops_cleanly"]
+__all__ = [
+    "MAX_EPISODES",
+    "MAX_LIVES",
+    "MAX_TASKS",
+    "RunIdentity",
+    "Series",
+    "check_count",
+    "run_series",
+]
 
 
 class Tally:
@@ -71,12 +81,33 @@ def file_sha(path: str | os.PathLike[str]) -> str:
     return h.hexdigest()
 
 
-def check_family_inputs(family: str, expected: dict[str, str]) -> None:
+MAX_EPISODES = 100_000
+"""Most episodes (or games) a run may ask for per family: at a tenth of a second each,
+three hours a method; more is a typing error, refused before anything is written."""
+MAX_LIVES = 10_000
+"""Most lives (worlds) of a lifelong run, and MAX_TASKS tasks in each."""
+MAX_TASKS = 10_000
+
+
+def check_count(value: int, name: str, most: int) -> int:
+    """``value`` if it is at most ``most``; otherwise one clear error."""
+    if value > most:
+        raise InvalidArgumentError(
+            f"{name} must be at most {most:,} (a run of more would take days and the memory "
+            f"of its bookkeeping); got {value:,}"
+        )
+    return value
+
+
+def check_family_inputs(
+    family: str, expected: dict[str, str], world_file: str | None = None
+) -> None:
     """Refuse to draw an episode of ``family`` when the data it draws from is no longer
-    what the run recorded (e.g. ``$COPI_MOVINGAI`` pointed elsewhere on a worker)."""
+    what the run recorded (e.g. ``$COPI_MOVINGAI`` pointed elsewhere on a worker). A
+    world file's content is checked as its worlds are read."""
     from copi.world import family_inputs
 
-    if expected and family_inputs(family) != expected:
+    if world_file is None and expected and family_inputs(family) != expected:
         raise ResultsError(
             f"the data the {family} family draws from changed during the run "
             f"({', '.join(sorted(expected))} differs); rerun the same command to be told "
@@ -169,54 +200,96 @@ def execute(
             raise
 
 
-def run_into_store(
+@dataclass(frozen=True)
+class Series:
+    """One run in a results store: a method's items 0 .. total - 1 (episodes, games or
+    lives) of one group (a family, a world file; None when the run has one).
+
+    Experiments with several runs (the benchmark: every method on every family;
+    Experiment 3: every method in the same lives) share each item's drawing between
+    their series: an item runs once for all the series still missing it."""
+
+    run_id: str
+    experiment: str
+    method: str
+    """The method's label in the store."""
+    config: dict[str, Any]
+    """The run's identity (what decides its results)."""
+    table: str
+    """"episodes", "games" or "lifelong"."""
+    total: int
+    group: Any = None
+
+
+Work = Callable[[Any, Any, int, list[Series]], list[tuple[Series, Any]]]
+"""work(config, group, k, series) -> [(series, its result for item k)] (one result per
+series; for table "lifelong", a result is a life: a list of task rows)."""
+
+
+def run_series(
     config: Any,
     output: str | os.PathLike[str],
+    series: list[Series],
     *,
-    experiment: str,
-    method: str,
-    table: str,
-    total: int,
-    one: Callable[[Any, int], Any],
-    many: Callable[[Any, list[int]], list[Any]],
-    workers: int,
-    scheduler: str | None,
-    progress: Callable[[int, int], None] | None,
-    chunk: int,
-) -> str:
-    """Run items 0..total-1 of a resolved ``config`` that are not yet in ``output``,
-    committing each as it comes back; returns the run id.
-
-    In-process, one item runs and is committed at a time; with a pool or a Dask cluster,
-    items go out in chunks of at most ``chunk`` and are committed as each chunk returns.
-    """
+    work: Work,
+    unit: str,
+    workers: int = 1,
+    scheduler: str | None = None,
+    progress: Callable[[int, int], None] | None = None,
+    chunk: int = 8,
+) -> None:
+    """The one store loop of every experiment: register (or resume) each series in
+    ``output``, run every item some series still misses (``work``, in this process or on
+    a pool or Dask cluster, which must pickle it), and commit each result as it comes
+    back, so that an interrupted run resumes where it stopped. ``progress(done, total)``
+    counts (series, item) pairs; ``unit`` names them in the Ctrl-C message."""
     from copi.experiments.store import ResultsStore
 
-    run_id = config.run_id()
     with ResultsStore(output) as store:
-        store.begin(run_id, experiment, method, config.identity())
-        add = store.add if table == "episodes" else store.add_game
-        todo = [k for k in range(total) if k not in store.done(run_id, method, table)]
-        tally = Tally(total - len(todo), total)
+        missing: dict[tuple[Any, int], list[Series]] = {}
+        total = 0
+        for s in series:
+            store.begin(s.run_id, s.experiment, s.method, s.config)
+            done = store.done(s.run_id, s.method, s.table)
+            total += s.total
+            for k in range(s.total):
+                if k not in done:
+                    missing.setdefault((s.group, k), []).append(s)
+        items = [(g, k, todo) for (g, k), todo in missing.items()]
+        tally = Tally(total - sum(len(t) for _, _, t in items), total)
         if progress is not None:
             progress(tally.finished, total)
 
-        def commit(results: list[Any]) -> None:
-            for result in results:
-                add(run_id, experiment, method, result)
+        def commit(results: list[tuple[Series, Any]]) -> None:
+            for s, result in results:
+                if s.table == "episodes":
+                    store.add(s.run_id, s.experiment, s.method, result)
+                elif s.table == "games":
+                    store.add_game(s.run_id, s.experiment, s.method, result)
+                elif result:
+                    store.add_life(s.run_id, s.experiment, s.method, result)
                 tally.finished += 1
             if progress is not None:
                 progress(tally.finished, total)
 
-        if not todo:
-            return run_id
+        if not items:
+            return
 
         def saved() -> int:
-            return len(store.done(run_id, method, table))
+            return sum(len(store.done(s.run_id, s.method, s.table)) for s in series)
 
         execute(
-            config, todo, one=lambda c, k: [one(c, k)], many=many, commit=commit,
-            workers=workers, scheduler=scheduler, chunk=chunk,
-            stopping=stops_cleanly(tally, output, table, saved),
+            config, items, one=lambda c, item: work(c, *item), many=_many(work),
+            commit=commit, workers=workers, scheduler=scheduler, chunk=chunk,
+            stopping=stops_cleanly(tally, output, unit, saved),
         )  # fmt: skip
-    return run_id
+
+
+class _many:
+    """Several items in one task (fewer round trips to the workers); picklable."""
+
+    def __init__(self, work: Work) -> None:
+        self.work = work
+
+    def __call__(self, config: Any, items: list[tuple[Any, int, list[Series]]]) -> list[Any]:
+        return [r for g, k, todo in items for r in self.work(config, g, k, todo)]

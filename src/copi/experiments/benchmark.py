@@ -21,18 +21,20 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from copi._rng import check_seed
 from copi.errors import InvalidArgumentError, InvalidWorldError
-from copi.experiments._episode import optimal_to_goal, run_agent
+from copi.experiments._episode import optimal_to_goal, run_episode
 from copi.experiments._runs import (
-    Tally,
+    MAX_EPISODES,
+    Series,
+    check_count,
     check_family_inputs,
     code_version,
-    execute,
     file_sha,
-    stops_cleanly,
+    run_series,
 )
 from copi.experiments.methods import (
-    CAPABILITY_PRESETS,
+    MethodRun,
     check_method_capabilities,
     make_agent,
     method_spec,
@@ -41,14 +43,16 @@ from copi.experiments.methods import (
 from copi.experiments.navigation import (
     EpisodeResult,
     _capabilities,
+    check_world_file,
     draw_episode,
     episode_world_name,
     result_row,
     skipped_row,
+    world_file_label,
 )
+from copi.experiments.presets import PRESETS
 from copi.geometry._arrays import positive_int
 from copi.learning import Capabilities, LearnParams
-from copi.online import check_strategy
 from copi.world import check_family, family_inputs
 
 __all__ = [
@@ -73,10 +77,12 @@ def benchmark_max_steps(optimal: float) -> int:
 
 @dataclass(frozen=True)
 class BenchmarkConfig:
-    """One benchmark: which methods, at which levels, on which families, how many episodes."""
+    """One benchmark: which methods (each at a level, with a global strategy), on which
+    families or worlds, how many episodes."""
 
-    methods: tuple[tuple[str, str], ...]
-    """(method, sensing level) pairs (see :func:`copi.experiments.methods.parse_methods`)."""
+    methods: tuple[MethodRun, ...]
+    """The arms (see :func:`copi.experiments.methods.parse_methods`; text such as
+    ``"dwa@sensor:mapping"`` is parsed)."""
     families: tuple[str, ...] = BENCHMARK_FAMILIES
     episodes: int = 1000
     """Episodes per family (0 .. episodes - 1)."""
@@ -84,51 +90,76 @@ class BenchmarkConfig:
     """Reported episodes use this seed; parameters were tuned on other seeds."""
     end_on_contact: bool = True
     """A contact with a moving obstacle ends the episode (a collision)."""
-    sensor_strategy: str = "greedy"
-    """The global strategy of every method at level ``sensor``: "greedy" (head for the
-    goal) or "mapping" (map as it goes, :class:`copi.online.Mapping`)."""
     agent_radius: float = 0.3
+    world_file: str | None = None
+    """Run the worlds of this file instead of the families (episode k draws its task in
+    world k mod n); the file's name labels its rows as a family's would."""
     capabilities: dict[str, str] = field(default_factory=dict)
-    """Capabilities file per preset ("faithful", "extended") for copi's methods."""
+    """Capabilities file per preset ("faithful", "learnt", ...) for copi's methods."""
     capabilities_sha: dict[str, str] = field(default_factory=dict)
     inputs: dict[str, dict[str, str]] = field(default_factory=dict)
     """Per family, the content hashes of the data it draws from
-    (:func:`copi.world.family_inputs`; filled in by :meth:`resolved`)."""
+    (:func:`copi.world.family_inputs`; the world file's for a world file; filled in by
+    :meth:`resolved`)."""
 
     def __post_init__(self) -> None:
         positive_int(self.episodes, "episodes")
-        check_strategy(self.sensor_strategy)
-        if not self.families:
-            raise InvalidArgumentError("families must name at least one family; got none")
-        for f in self.families:
-            check_family(f)
-        for m, level in self.methods:
-            parse_methods(f"{m}@{level}")
-        for m, _ in self.methods:
-            preset = method_spec(m).capabilities
+        check_count(self.episodes, "episodes", MAX_EPISODES)
+        check_seed(self.seed)
+        if not self.methods:
+            raise InvalidArgumentError("methods must name at least one method; got none")
+        # arms may be given as text ("dwa@sensor:mapping"), as on the command line
+        arms: list[MethodRun] = []
+        for run in self.methods:
+            arms += parse_methods(run) if isinstance(run, str) else [run]
+        object.__setattr__(self, "methods", tuple(dict.fromkeys(arms)))
+        for run in self.methods:
+            if not isinstance(run, MethodRun):
+                raise InvalidArgumentError(f"methods must be MethodRun arms; got {run!r}")
+            parse_methods(f"{run.method}@{run.sensing}"
+                          + (f":{run.strategy}" if run.sensing == "sensor" else ""))
+            preset = method_spec(run.method).capabilities
             if preset is not None and preset not in self.capabilities:
-                raise InvalidArgumentError(f"{m} needs the {preset!r} capabilities file")
+                raise InvalidArgumentError(f"{run.method} needs the {preset!r} capabilities file")
+        if self.world_file is None:
+            if not self.families:
+                raise InvalidArgumentError("families must name at least one family; got none")
+            for f in self.families:
+                check_family(f)
+
+    @property
+    def groups(self) -> tuple[str, ...]:
+        """The families episodes are drawn from; for a world file, its name alone."""
+        if self.world_file is not None:
+            return (world_file_label(self.world_file),)
+        return self.families
 
     def resolved(self) -> BenchmarkConfig:
-        """With the content hash of each capabilities file (checks each loads)."""
+        """With the content hash of each capabilities file (checking each loads and fits
+        the methods that run on it) and of the data each family draws from."""
         shas = {}
         for preset, path in self.capabilities.items():
             caps = Capabilities.load(path)
-            for m, _ in self.methods:
-                if method_spec(m).capabilities == preset:
-                    check_method_capabilities(m, caps, path)
+            for run in self.methods:
+                if method_spec(run.method).capabilities == preset:
+                    check_method_capabilities(run.method, caps, path)
             shas[preset] = file_sha(path)
-        inputs = {f: family_inputs(f) for f in self.families}
+        if self.world_file is not None:
+            check_world_file(self.world_file, agent_radius=self.agent_radius)
+            inputs = {self.groups[0]: {"world_file_sha": file_sha(self.world_file)}}
+        else:
+            inputs = {f: family_inputs(f) for f in self.families}
         return dataclasses.replace(self, capabilities_sha=shas, inputs=inputs)
 
-    def identity(self, family: str, method: str, sensing: str) -> dict[str, Any]:
-        """What makes one (family, method, level) run the same run: not the number of
-        episodes (a longer run extends a shorter one) nor any path."""
-        spec = method_spec(method)
+    def identity(self, family: str, run: MethodRun) -> dict[str, Any]:
+        """What makes one (family, arm) run the same run: not the number of episodes (a
+        longer run extends a shorter one) nor any path."""
+        spec = method_spec(run.method)
         ident: dict[str, Any] = {
             "family": family,
-            "method": method,
-            "sensing": sensing,
+            "method": run.method,
+            "sensing": run.sensing,
+            "strategy": run.strategy,
             "seed": self.seed,
             "end_on_contact": self.end_on_contact,
             "agent_radius": self.agent_radius,
@@ -137,34 +168,49 @@ class BenchmarkConfig:
             "code": code_version(),
             **self.inputs.get(family, {}),
         }
-        if sensing == "sensor" and self.sensor_strategy != "greedy":
-            ident["strategy"] = self.sensor_strategy
         if spec.capabilities is not None:
             ident["capabilities_sha"] = self.capabilities_sha.get(spec.capabilities, "")
         return ident
 
-    def run_id(self, family: str, method: str, sensing: str) -> str:
-        text = json.dumps(self.identity(family, method, sensing), sort_keys=True)
+    def run_id(self, family: str, run: MethodRun) -> str:
+        text = json.dumps(self.identity(family, run), sort_keys=True)
         return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+    def series(self) -> list[Series]:
+        """Every (family, arm) run of the benchmark, family by family."""
+        return [
+            Series(self.run_id(f, r), "benchmark", r.method, self.identity(f, r), "episodes",
+                   self.episodes, group=f)
+            for f in self.groups
+            for r in self.methods
+        ]  # fmt: skip
 
 
 def run_item(
-    config: BenchmarkConfig, family: str, k: int, todo: list[tuple[str, str, str]]
-) -> list[tuple[str, str, EpisodeResult]]:
-    """Episode k of ``family`` for each (run_id, method, level) in ``todo``."""
-    check_family_inputs(family, config.inputs.get(family, {}))
+    config: BenchmarkConfig, family: str, k: int, todo: list[Series]
+) -> list[tuple[Series, EpisodeResult]]:
+    """Episode k of ``family`` (or of the world file) for each series in ``todo``: the
+    world is drawn and the optimum computed once, then each method runs on a fresh copy
+    of the simulator."""
+    check_family_inputs(family, config.inputs.get(family, {}), config.world_file)
+    world_file = config.world_file
     try:
-        base = draw_episode(family, k, config.seed, agent_radius=config.agent_radius)
+        base = draw_episode(
+            family, k, config.seed, agent_radius=config.agent_radius, world_file=world_file,
+            world_file_sha=config.inputs.get(family, {}).get("world_file_sha", ""),
+        )  # fmt: skip
     except InvalidWorldError as exc:  # recorded, so that the run goes on
         name = episode_world_name(family, k)
         return [
-            (rid, m, skipped_row(k, config.seed, name, str(exc), family=family, sensing=level))
-            for rid, m, level in todo
-        ]
+            (s, skipped_row(k, config.seed, name, str(exc), family=family,
+                            sensing=s.config["sensing"], strategy=s.config["strategy"]))
+            for s in todo
+        ]  # fmt: skip
     optimal = optimal_to_goal(base)
     max_steps = benchmark_max_steps(optimal)
     out = []
-    for run_id, method, level in todo:
+    for s in todo:
+        method, sensing, strategy = s.method, s.config["sensing"], s.config["strategy"]
         preset = method_spec(method).capabilities
         caps = None
         if preset is not None:
@@ -173,22 +219,14 @@ def run_item(
             )
         sim = copy.deepcopy(base)
         agent = make_agent(method, caps)
-        res = run_agent(
-            agent, sim, sensing=level, max_steps=max_steps, end_on_contact=config.end_on_contact,
-            strategy=config.sensor_strategy,
+        res = run_episode(
+            agent, sim, sensing=sensing, max_steps=max_steps,
+            end_on_contact=config.end_on_contact,
+            strategy=strategy if sensing == "sensor" else "greedy",
         )  # fmt: skip
-        out.append(
-            (run_id, method, result_row(sim, k, config.seed, optimal, res, family=family,
-                                        sensing=level))
-        )  # fmt: skip
+        out.append((s, result_row(sim, k, config.seed, optimal, res, family=family,
+                                  sensing=sensing, strategy=strategy)))  # fmt: skip
     return out
-
-
-def run_items(
-    config: BenchmarkConfig, items: list[tuple[str, int, list[tuple[str, str, str]]]]
-) -> list[tuple[str, str, EpisodeResult]]:
-    """Several items in one task (fewer round trips to the workers)."""
-    return [row for f, k, todo in items for row in run_item(config, f, k, todo)]
 
 
 def ensure_capabilities(
@@ -208,7 +246,7 @@ def ensure_capabilities(
     paths = {}
     for preset in sorted(presets):
         path = d / f"capabilities-{preset}.npz"
-        params = dataclasses.replace(CAPABILITY_PRESETS[preset], seed=seed)
+        params = dataclasses.replace(PRESETS[preset].learn, seed=seed)
         if path.exists():
             _check_learnt_with(path, dataclasses.asdict(params))
         else:
@@ -238,48 +276,12 @@ def run_benchmark(
     workers: int = 1,
     scheduler: str | None = None,
     progress: Callable[[int, int], None] | None = None,
-) -> dict[tuple[str, str, str], str]:
+) -> dict[tuple[str, MethodRun], str]:
     """Run (or resume) the benchmark into the results file ``output``; returns the run id
-    of each (family, method, level)."""
-    from copi.experiments.store import ResultsStore
-
+    of each (family, arm)."""
     config = config.resolved()
-    runs: dict[tuple[str, str, str], str] = {}
-    with ResultsStore(output) as store:
-        missing: dict[tuple[str, int], list[tuple[str, str, str]]] = {}
-        total = 0
-        for family in config.families:
-            for method, level in config.methods:
-                rid = config.run_id(family, method, level)
-                runs[(family, method, level)] = rid
-                ident = config.identity(family, method, level)
-                store.begin(rid, "benchmark", method, ident)
-                done = store.done(rid, method)
-                for k in range(config.episodes):
-                    total += 1
-                    if k not in done:
-                        missing.setdefault((family, k), []).append((rid, method, level))
-        items = [(f, k, todo) for (f, k), todo in missing.items()]
-        tally = Tally(total - sum(len(t) for _, _, t in items), total)
-        if progress is not None:
-            progress(tally.finished, total)
-
-        def commit(rows: list[tuple[str, str, EpisodeResult]]) -> None:
-            for rid, method, result in rows:
-                store.add(rid, "benchmark", method, result)
-                tally.finished += 1
-            if progress is not None:
-                progress(tally.finished, total)
-
-        if not items:
-            return runs
-
-        def saved() -> int:
-            return sum(len(store.done(rid, m)) for (_, m, _), rid in runs.items())
-
-        execute(
-            config, items, one=lambda c, item: run_item(c, *item), many=run_items,
-            commit=commit, workers=workers, scheduler=scheduler, chunk=8,
-            stopping=stops_cleanly(tally, output, "episodes", saved),
-        )  # fmt: skip
-    return runs
+    series = config.series()
+    run_series(config, output, series, work=run_item, unit="episodes", workers=workers,
+               scheduler=scheduler, progress=progress, chunk=8)  # fmt: skip
+    arms = [(f, r) for f in config.groups for r in config.methods]
+    return {arm: s.run_id for arm, s in zip(arms, series, strict=True)}

@@ -1,6 +1,7 @@
-"""The benchmark's report: one table per family, paired differences against copi with
-bootstrap confidence intervals, and a figure of success against median excess. Read back
-from the results store only."""
+"""The benchmark's report: one table per family, paired differences against a reference
+method with bootstrap confidence intervals, and a figure of success against median
+excess. Read back from the results store only: any method or family the store holds is
+reported, registered in this copi or not."""
 
 from __future__ import annotations
 
@@ -13,18 +14,33 @@ from typing import Any
 import numpy as np
 
 from copi._files import save_figure, write_text
+from copi.core import SENSING_LEVELS
+from copi.errors import CopiError
 from copi.experiments.figures import _figure
-from copi.experiments.methods import METHODS
+from copi.experiments.methods import MethodRun, method_names, method_spec
 from copi.experiments.store import ResultsStore
-from copi.online import SENSING_LEVELS
 
-__all__ = ["PairedDifference", "paired_difference", "write_benchmark_report"]
+__all__ = [
+    "DEFAULT_AGAINST",
+    "PairedDifference",
+    "paired_difference",
+    "summarize_rows",
+    "write_benchmark_report",
+]
 
-REFERENCE = "copi-extended"
-"""The copi mode every other row is paired against (at the same level; oracle rows
-against its ``map`` row) — or, in a run without it, :data:`FALLBACK_REFERENCE` (a run of
-the learnt preset's ablations)."""
-FALLBACK_REFERENCE = "copi-learnt"
+DEFAULT_AGAINST = "copi-learnt"
+"""The method every row is paired against unless ``--against`` names another (in a run
+without it: the first method of the run in the registry's order); the report states it."""
+
+MIN_PAIRS = 10
+"""Fewer paired episodes than this give an estimate but no interval (a bootstrap of a
+handful of pairs is degenerate)."""
+
+_STRATEGY_WORDS = {
+    "greedy": "*greedy* (head for the goal)",
+    "mapping": "*mapping* (a map built from the ranges, re-planned)",
+    "causal": "*causal* (a map and a causal map learnt from experience)",
+}
 
 
 @dataclass(frozen=True)
@@ -79,31 +95,30 @@ def paired_difference(
     return PairedDifference(est, float(low), float(high), n)
 
 
-def _summary(rows: list[dict[str, Any]]) -> dict[str, Any]:
+def _median(values: list[float]) -> float:
+    return float(np.median(values)) if values else math.nan
+
+
+def summarize_rows(rows: list[Any]) -> dict[str, Any]:
+    """The benchmark's statistics of one arm's episodes (skipped ones left out)."""
+    rows = [r for r in rows if r["outcome"] != "skipped"]
     n = len(rows)
     out = np.array([r["outcome"] for r in rows])
-    ex = np.array(
-        [r["excess"] for r in rows if r["outcome"] == "success" and r["excess"] is not None],
-        dtype=float,
-    )
-    dec = np.array([r["decision_us"] for r in rows], dtype=float)
-    ttg = np.array([r["time_to_goal"] for r in rows if r["outcome"] == "success"], dtype=float)
-    clear = np.array([r["min_clearance"] for r in rows if r["min_clearance"] is not None])
-    turn = np.array(
-        [r["smoothness"] / max(r["steps"], 1) for r in rows if r["outcome"] == "success"],
-        dtype=float,
-    )
+    won = [r for r in rows if r["outcome"] == "success"]
+    ex = [r["excess"] for r in won if r["excess"] is not None]
     return {
         "n": n,
-        "success": float((out == "success").mean()),
-        "collision": float((out == "collision").mean()),
-        "timeout": float((out == "timeout").mean()),
-        "excess_median": float(np.median(ex)) if len(ex) else math.nan,
-        "excess_p90": float(np.percentile(ex, 90)) if len(ex) else math.nan,
-        "time_to_goal": float(np.median(ttg)) if len(ttg) else math.nan,
-        "clearance": float(np.median(clear)) if len(clear) else math.nan,
-        "turning": float(np.degrees(np.median(turn))) if len(turn) else math.nan,
-        "decisions_per_s": 1e6 / float(np.median(dec)) if len(dec) else math.nan,
+        "success": float((out == "success").mean()) if n else math.nan,
+        "collision": float((out == "collision").mean()) if n else math.nan,
+        "timeout": float((out == "timeout").mean()) if n else math.nan,
+        "excess_median": _median(ex),
+        "excess_p90": float(np.percentile(ex, 90)) if ex else math.nan,
+        "time_to_goal": _median([r["time_to_goal"] for r in won if r["time_to_goal"] is not None]),
+        "clearance": _median([r["min_clearance"] for r in rows if r["min_clearance"] is not None]),
+        "turning": math.degrees(_median([r["smoothness"] / max(r["steps"], 1) for r in won
+                                         if r["smoothness"] is not None])),  # fmt: skip
+        "decisions_per_s": 1e6 / _median([r["decision_us"] for r in rows
+                                          if r["decision_us"]]) if rows else math.nan,  # fmt: skip
         "no_optimum": int(sum(r["optimal_length"] is None for r in rows)),
     }
 
@@ -112,20 +127,21 @@ def _pct(x: float) -> str:
     return "—" if not math.isfinite(x) else f"{100 * x:.1f} %"
 
 
+def _num(x: float, fmt: str) -> str:
+    return "—" if not math.isfinite(x) else format(x, fmt)
+
+
 def _diff(d: PairedDifference, scale: float = 100.0) -> str:
     if d.n == 0 or not math.isfinite(d.estimate):
         return "—"
+    if d.n < MIN_PAIRS or not math.isfinite(d.low):
+        return f"{scale * d.estimate:+.1f} (n = {d.n}, no interval)"
     return f"{scale * d.estimate:+.1f} [{scale * d.low:+.1f}, {scale * d.high:+.1f}]"
 
 
-def _by_episode(rows: list[dict[str, Any]]) -> dict[int, dict[str, Any]]:
-    return {int(r["episode"]): r for r in rows}
-
-
-def _pair(
-    rows: list[dict[str, Any]], ref: list[dict[str, Any]]
-) -> tuple[PairedDifference, PairedDifference]:
-    a, b = _by_episode(rows), _by_episode(ref)
+def _pair(rows: list[Any], ref: list[Any]) -> tuple[PairedDifference, PairedDifference]:
+    a = {int(r["episode"]): r for r in rows if r["outcome"] != "skipped"}
+    b = {int(r["episode"]): r for r in ref if r["outcome"] != "skipped"}
     common = sorted(set(a) & set(b))
     sa = [a[k]["outcome"] == "success" for k in common]
     sb = [b[k]["outcome"] == "success" for k in common]
@@ -134,38 +150,58 @@ def _pair(
         if a[k]["outcome"] == "success" and b[k]["outcome"] == "success"
         and a[k]["excess"] is not None and b[k]["excess"] is not None
     ]  # fmt: skip
-    ea = [a[k]["excess"] for k in both]
-    eb = [b[k]["excess"] for k in both]
     return (
         paired_difference(sa, sb),
-        paired_difference(ea, eb, statistic="median"),
+        paired_difference([a[k]["excess"] for k in both], [b[k]["excess"] for k in both],
+                          statistic="median"),  # fmt: skip
     )
 
 
-def _figure_success_excess(
-    table: dict[str, dict[tuple[str, str], dict[str, Any]]], out: Path
-) -> Path:
+def verdict(d_success: PairedDifference, d_excess: PairedDifference) -> str:
+    """The row against the reference, in words, from whichever differences exclude zero
+    (on too few pairs, none does)."""
+    parts = []
+    if d_success.excludes_zero and d_success.n >= MIN_PAIRS:
+        parts.append("more successes" if d_success.estimate > 0 else "fewer successes")
+    if d_excess.excludes_zero and d_excess.n >= MIN_PAIRS:
+        parts.append("longer paths" if d_excess.estimate > 0 else "shorter paths")
+    return "; ".join(parts)
+
+
+def _order(arm: MethodRun, known: dict[str, int]) -> tuple[int, str, int, str]:
+    return (known.get(arm.method, len(known)), arm.method, SENSING_LEVELS.index(arm.sensing),
+            arm.strategy)  # fmt: skip
+
+
+def _family_title(family: str) -> str:
+    return f"worlds of {family[5:]}" if family.startswith("file:") else family
+
+
+def _figure_success_excess(table: dict[str, dict[MethodRun, dict[str, Any]]], out: Path) -> Path:
     families = list(table)
     cols = min(3, len(families))
     rows_n = math.ceil(len(families) / cols)
-    fig = _figure(4.2 * cols, 3.6 * rows_n + (0 if len(families) % cols else 1.2))
+    extra = 0 if len(families) % cols else 1.2
+    fig = _figure(4.2 * cols, 3.6 * rows_n + extra + (1.4 if cols == 1 else 0))
     axes = np.atleast_1d(fig.subplots(rows_n, cols, squeeze=False)).ravel()
     markers = {"sensor": "o", "map": "s", "oracle": "^"}
-    names = list(METHODS)
+    names = sorted({a.method for t in table.values() for a in t}, key=lambda m: (
+        method_names().index(m) if m in method_names() else 99, m))  # fmt: skip
     import matplotlib
 
     # One distinct colour per method (tab10, then tab20's odd entries), shape per level.
     tab10, tab20 = matplotlib.colormaps["tab10"], matplotlib.colormaps["tab20"]
     palette = [tab10(i) for i in range(10)] + [tab20(i) for i in range(1, 20, 2)]
     for ax, family in zip(axes, families, strict=False):
-        for (method, level), s in table[family].items():
+        for arm, s in table[family].items():
             if not math.isfinite(s["excess_median"]):
                 continue
-            c = palette[names.index(method) % len(palette)]
-            ax.scatter(100 * s["excess_median"], 100 * s["success"], marker=markers[level],
-                       color=c, s=36, edgecolor="black" if method.startswith("copi") else "none",
-                       label=f"{method} ({level})", zorder=3)  # fmt: skip
-        ax.set_title(family)
+            c = palette[names.index(arm.method) % len(palette)]
+            ax.scatter(100 * s["excess_median"], 100 * s["success"], marker=markers[arm.sensing],
+                       color=c, s=36,
+                       edgecolor="black" if arm.method.startswith("copi") else "none",
+                       label=arm.label, zorder=3)  # fmt: skip
+        ax.set_title(_family_title(family))
         ax.set_xlabel("median excess (%)")
         ax.set_ylabel("success (%)")
         ax.grid(alpha=0.3)
@@ -176,55 +212,85 @@ def _figure_success_excess(
         for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
             seen.setdefault(lab, h)
     spare = axes[len(families)] if len(axes) > len(families) else None
+    title = "● sensor   ■ map   ▲ oracle"
     if seen and spare is not None:  # the legend fills the empty panel
         spare.legend(list(seen.values()), list(seen), loc="center", ncol=2, fontsize=7,
-                     frameon=False, title="● sensor   ■ map   ▲ oracle", title_fontsize=8)
+                     frameon=False, title=title, title_fontsize=8)  # fmt: skip
         fig.subplots_adjust(hspace=0.45, wspace=0.3)
-    elif seen:
-        fig.legend(list(seen.values()), list(seen), loc="lower center", ncol=4, fontsize=7,
-                   frameon=False, bbox_to_anchor=(0.5, 0.0))
-        fig.subplots_adjust(bottom=0.1 + 0.03 * math.ceil(len(seen) / 4), hspace=0.45,
+    elif seen:  # below the panels, inside the figure (bbox_inches keeps it whole)
+        ncol = 2 if cols == 1 else 4
+        fig.legend(list(seen.values()), list(seen), loc="lower center", ncol=ncol, fontsize=7,
+                   frameon=False, title=title, title_fontsize=8,
+                   bbox_to_anchor=(0.5, 0.0))  # fmt: skip
+        fig.subplots_adjust(bottom=0.12 + 0.05 * math.ceil(len(seen) / ncol), hspace=0.45,
                             wspace=0.3)  # fmt: skip
     target = out / "benchmark_success_excess.png"
-    save_figure(fig, target)
+    save_figure(fig, target, bbox_inches="tight")
     return target
 
 
-def write_benchmark_report(
-    results: str | os.PathLike[str], directory: str | os.PathLike[str]
-) -> Path:
-    """Write ``benchmark.md`` and its figure from a benchmark results file."""
-    out = Path(directory)
-    out.mkdir(parents=True, exist_ok=True)
-    groups: dict[str, dict[tuple[str, str], list[dict[str, Any]]]] = {}
-    params: dict[str, Any] = {}
-    strategies: set[str] = set()
+def read_benchmark(results: str | os.PathLike[str]) -> tuple[
+    dict[str, dict[MethodRun, list[Any]]], dict[str, dict[str, Any]], dict[str, Any]
+]:  # fmt: skip
+    """(family -> arm -> rows, method -> parameters, family -> a run's config) of every
+    benchmark run in ``results`` (skipped episodes, the same for every method, left out)."""
+    groups: dict[str, dict[MethodRun, list[Any]]] = {}
+    params: dict[str, dict[str, Any]] = {}
+    configs: dict[str, Any] = {}
     with ResultsStore(results, readonly=True) as store:
         for run in store.runs():
-            if run["experiment"] != "benchmark":
+            if run.experiment != "benchmark":
                 continue
-            cfg = run["config"]
-            # skipped episodes (no valid task in the world) are the same for every method
-            rows = [r for r in store.episodes(run["run_id"]) if r["outcome"] != "skipped"]
-            groups.setdefault(cfg["family"], {})[(cfg["method"], cfg["sensing"])] = rows
-            params[cfg["method"]] = cfg.get("params", {})
-            if cfg["sensing"] == "sensor":
-                strategies.add(cfg.get("strategy", "greedy"))
+            cfg = run.config
+            rows = store.episodes(run.run_id)
+            if not rows:
+                continue
+            first = rows[0]
+            arm = MethodRun(first.method, first.sensing, first.strategy)  # type: ignore[arg-type]
+            groups.setdefault(cfg["family"], {})[arm] = rows
+            params[first.method] = cfg.get("params", {})
+            configs.setdefault(cfg["family"], cfg)
+    return groups, params, configs
+
+
+def write_benchmark_report(
+    results: str | os.PathLike[str],
+    directory: str | os.PathLike[str],
+    *,
+    against: str | None = None,
+) -> Path:
+    """Write ``benchmark.md`` and its figure from a benchmark results file; the paired
+    differences are each row minus ``against`` (default :data:`DEFAULT_AGAINST`)."""
+    groups, params, configs = read_benchmark(results)
     if not groups:
         raise FileNotFoundError(f"no benchmark runs in {results}")
-    order = {m: i for i, m in enumerate(METHODS)}
-    present = {m for g in groups.values() for m, _ in g}
-    reference = (
-        REFERENCE
-        if REFERENCE in present or FALLBACK_REFERENCE not in present
-        else FALLBACK_REFERENCE
-    )
+    known = {m: i for i, m in enumerate(method_names())}
+    present = {a.method for g in groups.values() for a in g}
+    if against is not None and against not in present:
+        from copi.errors import InvalidArgumentError
+
+        raise InvalidArgumentError(
+            f"--against {against}: no run of it in {results} (it holds "
+            f"{', '.join(sorted(present))})"
+        )
+    reference = against or (
+        DEFAULT_AGAINST if DEFAULT_AGAINST in present
+        else min(present, key=lambda m: (known.get(m, len(known)), m))
+    )  # fmt: skip
+    out = Path(directory)
+    out.mkdir(parents=True, exist_ok=True)
     from copi.experiments.benchmark import BENCHMARK_FAMILIES
 
     families = [f for f in BENCHMARK_FAMILIES if f in groups] + sorted(
         f for f in groups if f not in BENCHMARK_FAMILIES
     )
-    table: dict[str, dict[tuple[str, str], dict[str, Any]]] = {}
+    strategies = sorted({a.strategy for g in groups.values() for a in g if a.sensing == "sensor"})
+    words = " / ".join(_STRATEGY_WORDS.get(k, f"*{k}*") for k in strategies)
+    chosen = "named with --against" if against else (
+        "the default" if reference == DEFAULT_AGAINST
+        else f"the first method of the run ({DEFAULT_AGAINST}, the default, did not run)"
+    )  # fmt: skip
+    table: dict[str, dict[MethodRun, dict[str, Any]]] = {}
     lines = [
         "# Benchmark — every method on the same episodes",
         "",
@@ -232,32 +298,33 @@ def write_benchmark_report(
         "with a moving obstacle, which ends the episode; timeout: 3 × optimum + 100 steps, at "
         "most 1000). Excess = path length / optimum − 1 over successful episodes; the optimum "
         "is the shortest path to the goal's tolerance disc on the snapshot at t = 0 with the "
-        "obstacles frozen. Sensing: `sensor` = ranges + goal relative to the agent; `map` = "
-        "plus the static world; `oracle` = plus obstacle positions and velocities. "
-        f"Δ columns: the method minus {reference} at the same level (oracle rows: minus its "
-        "`map` row) on the same episodes, in points, with 95 % bootstrap intervals; Δ excess "
-        "over the episodes both succeeded in. **copi loses** marks a row whose success is "
-        f"higher than {reference}'s with an interval excluding zero. Steps to goal, "
-        "clearance (the least surface distance to a moving obstacle over an episode, "
-        "negative after a contact) and turning per step (the sum of turning angles between "
-        "moves over the steps) are medians; steps and turning over successful episodes. "
-        "At the `sensor` level every method's global strategy is "
-        + " / ".join(
-            {"greedy": "*greedy* (head for the goal)",
-             "mapping": "*mapping* (a map built from the ranges, re-planned)"}[k]
-            for k in sorted(strategies)
-        )
-        + "; at `map` and `oracle`, the static route.",
+        "obstacles frozen (an agent may pass where a disc stood, so an excess can be slightly "
+        "negative). Sensing: `sensor` = ranges + goal relative to the agent; `map` = "
+        "plus the static world; `oracle` = plus obstacle positions and velocities; "
+        "strategy: the global direction every method at the level follows"
+        + (f" ({words} at `sensor`)" if words else "")
+        + ", the static route at `map` and `oracle`.",
+        "",
+        f"**Reference: {reference}** ({chosen}). Δ columns: the row minus {reference} at the "
+        "same level and strategy (oracle rows: minus its `map` row) on the same episodes, in "
+        "points, with 95 % bootstrap intervals (none on fewer than "
+        f"{MIN_PAIRS} pairs); Δ excess over the episodes both succeeded in. *Versus* says "
+        "which differences exclude zero: more or fewer successes, shorter or longer paths "
+        f"than {reference}. n: the row's episodes. Steps to goal, clearance (the least "
+        "surface distance to a moving obstacle over an episode, negative after a contact) "
+        "and turning per step are medians; steps and turning over successful episodes.",
         "",
     ]
     for family in families:
         g = groups[family]
-        keys = sorted(g, key=lambda k: (order.get(k[0], 99), SENSING_LEVELS.index(k[1])))
-        table[family] = {k: _summary(g[k]) for k in keys}
-        n = max(s["n"] for s in table[family].values())
+        arms = sorted(g, key=lambda a: _order(a, known))
+        table[family] = {a: summarize_rows(g[a]) for a in arms}
+        counts = {s["n"] for s in table[family].values()}
+        n = max(counts)
+        extent = f"{n} episodes" if len(counts) == 1 else f"up to {n} episodes; n per row"
         no_opt = max(s["no_optimum"] for s in table[family].values())
         lines += [
-            f"## {family} ({n} episodes)",
+            f"## {_family_title(family)} ({extent})",
             "",
             *(
                 [f"{no_opt} episode{'s have' if no_opt > 1 else ' has'} no path on the frozen "
@@ -265,37 +332,43 @@ def write_benchmark_report(
                  f"measured for {'them' if no_opt > 1 else 'it'}.", ""]
                 if no_opt else []
             ),  # fmt: skip
-            "| method | sensing | success | collision | timeout | median excess | p90 excess "
-            "| steps to goal | clearance | turning / step | decisions / s | Δ success "
-            "| Δ median excess | |",
-            "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+            "| method | sensing | strategy | n | success | collision | timeout | median excess "
+            "| p90 excess | steps to goal | clearance | turning / step | decisions / s "
+            f"| Δ success | Δ median excess | versus {reference} |",
+            "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
         ]
-        for method, level in keys:
-            s = table[family][(method, level)]
-            ref_level = level if level != "oracle" else "map"
-            ref = g.get((reference, ref_level))
+        for arm in arms:
+            s = table[family][arm]
+            ref_level = arm.sensing if arm.sensing != "oracle" else "map"
+            ref_arm = MethodRun(reference, ref_level,  # type: ignore[arg-type]
+                                arm.strategy if ref_level == "sensor" else "route")  # fmt: skip
+            ref = g.get(ref_arm)
             d_s = d_e = PairedDifference(math.nan, math.nan, math.nan, 0)
-            if ref is not None and method != reference:
-                d_s, d_e = _pair(g[(method, level)], ref)
-            flag = ""
-            if d_s.excludes_zero:
-                flag = "**copi loses**" if d_s.estimate > 0 else "copi wins"
+            if ref is not None and arm != ref_arm:
+                d_s, d_e = _pair(g[arm], ref)
+            label = f"**{arm.method}**" if arm.method == reference else arm.method
             lines.append(
-                f"| {method} | {level} | {_pct(s['success'])} | {_pct(s['collision'])} | "
-                f"{_pct(s['timeout'])} | {_pct(s['excess_median'])} | {_pct(s['excess_p90'])} | "
-                f"{s['time_to_goal']:.0f} | {s['clearance']:.2f} | {s['turning']:.0f}° | "
-                f"{s['decisions_per_s']:,.0f} | {_diff(d_s)} | "
-                f"{_diff(d_e)} | {flag} |"
+                f"| {label} | {arm.sensing} | {arm.strategy} | {s['n']} | {_pct(s['success'])} "
+                f"| {_pct(s['collision'])} | {_pct(s['timeout'])} | {_pct(s['excess_median'])} "
+                f"| {_pct(s['excess_p90'])} | {_num(s['time_to_goal'], '.0f')} "
+                f"| {_num(s['clearance'], '.2f')} | {_num(s['turning'], '.0f')}° "
+                f"| {_num(s['decisions_per_s'], ',.0f')} | {_diff(d_s)} | {_diff(d_e)} "
+                f"| {'reference' if arm == ref_arm else verdict(d_s, d_e)} |"
             )
         lines.append("")
     fig = _figure_success_excess(table, out)
     lines += [f"![success against median excess]({fig.name})", "", "## Methods", ""]
     lines += ["| method | needs | what it is | parameters |", "|---|---|---|---|"]
-    seen = {m for f in groups for m, _ in groups[f]}
-    for name, spec in METHODS.items():
-        if name in seen:
-            p = ", ".join(f"{k} = {v}" for k, v in params.get(name, spec.params).items()) or "—"
-            lines.append(f"| {name} | {spec.sensing} | {spec.summary} | {p} |")
+    shown = sorted(present, key=lambda m: (known.get(m, len(known)), m))
+    for name in shown:
+        p = ", ".join(f"{k} = {v}" for k, v in params.get(name, {}).items()) or "—"
+        needs: str
+        try:
+            spec = method_spec(name)
+            needs, summary = spec.sensing, spec.summary or "—"
+        except CopiError:  # a method of another package, not installed here
+            needs, summary = "?", "(not registered in this copi: its package is not installed)"
+        lines.append(f"| {name} | {needs} | {summary} | {p} |")
     report = out / "benchmark.md"
     write_text(report, "\n".join(lines) + "\n")
     return report

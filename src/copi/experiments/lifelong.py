@@ -10,10 +10,10 @@ contact, a timeout) leaves the agent where it stopped; it is carried to the next
 and its odometry (its position less where its life began) says so: the agent knows where
 it is in its own frame, never the map.
 
-Methods (:data:`LIFELONG_METHODS`) differ in what they keep from task to task: the
+Arms (:data:`LIFELONG_METHODS`) differ in what they keep from task to task: the
 ``causal`` strategy keeps its causal map and occupancy grid, ``mapping`` keeps the grid
-(like for like with the baselines, which keep their grids too), ``continual`` also keeps
-the contexts it grew. One work item is one world: its tasks and their optima are drawn
+(like for like with the baselines, which keep their grids too), ``copi-learnt-continual``
+also keeps the contexts it grew. One work item is one world: its tasks and their optima are drawn
 once, then each method still missing for it lives its life there; a life's rows are
 committed together, so a rerun resumes at the first world not finished.
 """
@@ -33,18 +33,21 @@ from typing import Any
 
 import numpy as np
 
+from copi._rng import check_seed
 from copi.errors import InvalidArgumentError, InvalidWorldError
-from copi.experiments._episode import optimal_to_goal, run_agent
+from copi.experiments._episode import optimal_to_goal, run_episode
 from copi.experiments._runs import (
-    Tally,
+    MAX_LIVES,
+    MAX_TASKS,
+    Series,
+    check_count,
     check_family_inputs,
     code_version,
-    execute,
     file_sha,
-    stops_cleanly,
+    run_series,
 )
 from copi.experiments.benchmark import benchmark_max_steps
-from copi.experiments.methods import make_agent, method_spec
+from copi.experiments.methods import MethodRun, make_agent, method_spec, parse_methods
 from copi.experiments.navigation import _capabilities
 from copi.geometry._arrays import positive_int
 from copi.world import RangeSensor, Simulator, check_family, family_inputs, sample_world
@@ -54,66 +57,49 @@ __all__ = [
     "LIFELONG_METHODS",
     "LifeResult",
     "LifelongConfig",
-    "LifelongMethod",
+    "REFERENCE",
     "draw_life",
     "parse_lifelong_methods",
     "run_lifelong",
 ]
 
 
-@dataclass(frozen=True)
-class LifelongMethod:
-    """A method of Experiment 3: a navigating method, at a level, with a global strategy
-    and what it keeps between tasks."""
+LIFELONG_METHODS: dict[str, str] = {
+    "copi-learnt@sensor:causal": "the learnt preset planning over its causal map and "
+    "occupancy grid, both kept from task to task",
+    "copi-learnt-continual@sensor:causal": "as copi-learnt with the causal strategy, also "
+    "growing contexts for unfamiliar readings",
+    "copi-learnt@sensor:mapping": "the learnt preset following its occupancy grid (kept), no "
+    "causal map",
+    "compass-guard@sensor:mapping": "compass-guard following its occupancy grid (kept)",
+    "dwa@sensor:mapping": "DWA following its occupancy grid (kept)",
+    "copi-learnt@map": "the learnt preset given the static map (the route): the yardstick "
+    "the sensor-level agent should reach",
+}
+"""Experiment 3's arms (method, level, strategy), copi's first, and what each keeps."""
 
-    name: str
-    method: str
-    sensing: str
-    strategy: str
-    continual: bool = False
-    summary: str = ""
-
-
-LIFELONG_METHODS: dict[str, LifelongMethod] = {
-    m.name: m
-    for m in [
-        LifelongMethod("copi-learnt+causal", "copi-learnt", "sensor", "causal", False,
-                       "the learnt preset planning over its causal map and occupancy grid, "
-                       "both kept from task to task"),
-        LifelongMethod("copi-learnt+causal+continual", "copi-learnt", "sensor", "causal", True,
-                       "as copi-learnt+causal, also growing contexts for unfamiliar readings"),
-        LifelongMethod("copi-learnt+mapping", "copi-learnt", "sensor", "mapping", False,
-                       "the learnt preset following its occupancy grid (kept), no causal map"),
-        LifelongMethod("compass-guard+mapping", "compass-guard", "sensor", "mapping", False,
-                       "compass-guard following its occupancy grid (kept)"),
-        LifelongMethod("dwa+mapping", "dwa", "sensor", "mapping", False,
-                       "DWA following its occupancy grid (kept)"),
-        LifelongMethod("copi-learnt@map", "copi-learnt", "map", "greedy", False,
-                       "the learnt preset given the static map (the route): the yardstick "
-                       "the sensor-level agent should reach"),
-    ]
-}  # fmt: skip
-"""Experiment 3's methods, copi's first."""
+REFERENCE = MethodRun("copi-learnt", "sensor", "causal")
+"""The arm every other arm of Experiment 3 is paired against."""
 
 
-GROW_EVERY = 20
-"""Unfamiliar readings per context grown, for the continual methods (see
-:class:`~copi.online.LearntAgent`)."""
-
-
-def parse_lifelong_methods(text: str | None) -> tuple[str, ...]:
-    """``"copi-learnt+causal,dwa+mapping"`` -> names; None: all of them."""
-    if text is None:
-        return tuple(LIFELONG_METHODS)
-    names = [t.strip() for t in text.split(",") if t.strip()]
-    if not names:
+def parse_lifelong_methods(text: str | None) -> tuple[MethodRun, ...]:
+    """``"copi-learnt@sensor:causal,dwa@sensor:mapping"`` -> arms; None: all of
+    :data:`LIFELONG_METHODS`. A method named alone runs at ``sensor`` with the ``causal``
+    strategy (copi's) or ``mapping`` (methods without contexts keep only a grid)."""
+    items = list(LIFELONG_METHODS) if text is None else [
+        t.strip() for t in text.split(",") if t.strip()
+    ]  # fmt: skip
+    if not items:
         raise InvalidArgumentError("methods must name at least one method; got none")
-    for n in names:
-        if n not in LIFELONG_METHODS:
-            raise InvalidArgumentError(
-                f"lifelong method must be one of {', '.join(LIFELONG_METHODS)}; got {n!r}"
-            )
-    return tuple(dict.fromkeys(names))
+    out: list[MethodRun] = []
+    for item in items:
+        if "@" not in item and ":" not in item:
+            spec = method_spec(item)
+            item = f"{item}@sensor:{'causal' if spec.capabilities else 'mapping'}"
+        for run in parse_methods(item):
+            if run not in out:
+                out.append(run)
+    return tuple(out)
 
 
 @dataclass(frozen=True)
@@ -126,7 +112,7 @@ class LifelongConfig:
     worlds: int = 20
     tasks: int = 50
     seed: int = 0
-    methods: tuple[str, ...] = tuple(LIFELONG_METHODS)
+    methods: tuple[MethodRun, ...] = parse_lifelong_methods(None)
     agent_radius: float = 0.3
     capabilities_sha: str = ""
     maps: str | None = None
@@ -143,20 +129,31 @@ class LifelongConfig:
         check_family(self.family)
         positive_int(self.worlds, "worlds")
         positive_int(self.tasks, "tasks")
+        check_count(self.worlds, "worlds", MAX_LIVES)
+        check_count(self.tasks, "tasks", MAX_TASKS)
+        check_seed(self.seed)
         if not self.methods:
             raise InvalidArgumentError("methods must name at least one method; got none")
+        # arms may be given as text, as on the command line
+        arms: list[MethodRun] = []
         for m in self.methods:
-            parse_lifelong_methods(m)
-        needs = [m for m in self.methods if method_spec(LIFELONG_METHODS[m].method).capabilities]
+            arms += list(parse_lifelong_methods(m)) if isinstance(m, str) else [m]
+        object.__setattr__(self, "methods", tuple(dict.fromkeys(arms)))
+        for m in self.methods:
+            if not isinstance(m, MethodRun):
+                raise InvalidArgumentError(f"methods must be MethodRun arms; got {m!r}")
+        needs = [m for m in self.methods if method_spec(m.method).capabilities]
         if needs and self.capabilities is None:
-            raise InvalidArgumentError(f"{needs[0]} needs the learnt preset's capabilities file")
+            raise InvalidArgumentError(
+                f"{needs[0].label} needs the learnt preset's capabilities file"
+            )
 
     def resolved(self) -> LifelongConfig:
         """With the capabilities file's content hash (checks it loads and has what the
         learnt preset needs)."""
         if self.capabilities is None:
             return dataclasses.replace(self, inputs=family_inputs(self.family))
-        from copi.experiments.methods import check_preset_capabilities
+        from copi.experiments.presets import check_preset_capabilities
         from copi.learning import Capabilities
 
         caps = Capabilities.load(self.capabilities)
@@ -180,14 +177,14 @@ class LifelongConfig:
         # as the strategy will load it.
         from copi.online import CausalStrategy
 
-        for name in self.methods:
-            if LIFELONG_METHODS[name].strategy != "causal":
+        for run in self.methods:
+            if run.strategy != "causal":
                 continue
             for life in range(self.worlds):
-                path = causal_map_path(self.from_maps, name, self.family, life, self.seed)
+                path = causal_map_path(self.from_maps, run, self.family, life, self.seed)
                 if not path.is_file():
                     raise InvalidArgumentError(
-                        f"{self.from_maps}: no causal map of {name} in world "
+                        f"{self.from_maps}: no causal map of {run.label} in world "
                         f"{world_identity(self.family, life, self.seed)} ({path.name})"
                     )
                 CausalStrategy.load(path, world=world_identity(self.family, life, self.seed),
@@ -200,27 +197,34 @@ class LifelongConfig:
             h.update(path.name.encode() + bytes.fromhex(file_sha(path)))
         return dataclasses.replace(done, from_maps_sha=h.hexdigest())
 
-    def identity(self, method: str) -> dict[str, Any]:
-        """What makes a method's run the same run: not the number of worlds (more worlds
+    def identity(self, run: MethodRun) -> dict[str, Any]:
+        """What makes an arm's run the same run: not the number of worlds (more worlds
         extend a run), nor any path."""
-        m = LIFELONG_METHODS[method]
-        spec = method_spec(m.method)
+        spec = method_spec(run.method)
         ident: dict[str, Any] = {
             "experiment": "lifelong", "family": self.family, "tasks": self.tasks,
-            "seed": self.seed, "method": method, "base": m.method, "sensing": m.sensing,
-            "strategy": m.strategy, "continual": m.continual, "params": spec.params,
+            "seed": self.seed, "method": run.method, "sensing": run.sensing,
+            "strategy": run.strategy, "params": spec.params,
             "agent_radius": self.agent_radius, "code": code_version(),
             "max_steps": "min(1000, ceil(3 optimal + 100))", **self.inputs,
         }  # fmt: skip
         if spec.capabilities is not None:
             ident["capabilities_sha"] = self.capabilities_sha
-        if self.from_maps is not None and m.strategy == "causal":
+        if self.from_maps is not None and run.strategy == "causal":
             ident["from_maps_sha"] = self.from_maps_sha
         return ident
 
-    def run_id(self, method: str) -> str:
-        text = json.dumps(self.identity(method), sort_keys=True)
+    def run_id(self, run: MethodRun) -> str:
+        text = json.dumps(self.identity(run), sort_keys=True)
         return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+    def series(self) -> list[Series]:
+        """Every arm's run: its lives 0 .. worlds - 1."""
+        return [
+            Series(self.run_id(r), "lifelong", r.method, self.identity(r), "lifelong",
+                   self.worlds)
+            for r in self.methods
+        ]  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -247,6 +251,8 @@ class LifeResult:
     """Context nodes grown so far in this life (continual methods)."""
     options: int
     """Options recorded in the causal map so far in this life (causal methods)."""
+    strategy: str = "route"
+    """The arm's global strategy ("route" at level map)."""
 
 
 def world_identity(family: str, life: int, seed: int) -> str:
@@ -254,9 +260,12 @@ def world_identity(family: str, life: int, seed: int) -> str:
     return f"{family}-life-{life:04d}-seed-{seed}"
 
 
-def causal_map_path(directory: str, method: str, family: str, life: int, seed: int) -> Path:
+def causal_map_path(
+    directory: str, run: MethodRun, family: str, life: int, seed: int
+) -> Path:
     """Where a run saves (``maps``) and finds (``from_maps``) a life's causal map."""
-    return Path(directory) / f"{method}-{world_identity(family, life, seed)}.npz"
+    name = f"{run.method}-{run.sensing}-{run.strategy}"
+    return Path(directory) / f"{name}-{world_identity(family, life, seed)}.npz"
 
 
 def draw_life(
@@ -285,46 +294,45 @@ def draw_life(
     return sims
 
 
-def _agent(config: LifelongConfig, name: str) -> Any:
-    m = LIFELONG_METHODS[name]
-    spec = method_spec(m.method)
-    caps = None
-    if spec.capabilities is not None:
-        assert config.capabilities is not None
-        caps = _capabilities(config.capabilities, config.capabilities_sha)
-    params = {"continual": True, "grow_every": GROW_EVERY} if m.continual else {}
-    return make_agent(m.method, caps, **params)
+def _arm(series: Series) -> MethodRun:
+    c = series.config
+    return MethodRun(c["method"], c["sensing"], c["strategy"])
 
 
 def live(
-    config: LifelongConfig, name: str, life: int, sims: list[Simulator], optima: list[float]
-) -> list[LifeResult]:
-    """Method ``name``'s life in world ``life``: its tasks in order, one agent throughout."""
-    m = LIFELONG_METHODS[name]
-    agent = _agent(config, name)
+    config: LifelongConfig, run: MethodRun, life: int, sims: list[Simulator],
+    optima: list[float],
+) -> list[LifeResult]:  # fmt: skip
+    """Arm ``run``'s life in world ``life``: its tasks in order, one agent throughout."""
+    caps = None
+    if method_spec(run.method).capabilities is not None:
+        assert config.capabilities is not None
+        caps = _capabilities(config.capabilities, config.capabilities_sha)
+    agent = make_agent(run.method, caps)
     ident = world_identity(config.family, life, config.seed)
-    if config.from_maps is not None and m.strategy == "causal":
+    steering = getattr(agent, "steering", None)
+    if config.from_maps is not None and run.strategy == "causal" and steering is not None:
         from copi.online import CausalStrategy
 
-        agent.steering.causal = CausalStrategy.load(
-            causal_map_path(config.from_maps, name, config.family, life, config.seed),
+        steering.causal = CausalStrategy.load(
+            causal_map_path(config.from_maps, run, config.family, life, config.seed),
             world=ident, capabilities=config.capabilities_sha,
         )  # fmt: skip
     origin = sims[0].position.copy()
     rows = []
+    strategy = run.strategy if run.sensing == "sensor" else "greedy"
     for t, (base, optimal) in enumerate(zip(sims, optima, strict=True)):
         sim = copy.deepcopy(base)
-        res = run_agent(
-            agent, sim, sensing=m.sensing, max_steps=benchmark_max_steps(optimal),
-            strategy=m.strategy, origin=origin,
+        res = run_episode(
+            agent, sim, sensing=run.sensing, max_steps=benchmark_max_steps(optimal),
+            strategy=strategy, origin=origin,
         )  # fmt: skip
         success = res.outcome == "success"
-        steering = getattr(agent, "steering", None)
         causal = getattr(steering, "causal", None)
         rows.append(
             LifeResult(
                 world=sim.world.name, life=life, task=t, seed=config.seed,
-                family=config.family, sensing=m.sensing, outcome=res.outcome,
+                family=config.family, sensing=run.sensing, outcome=res.outcome,
                 success=success, steps=res.steps, path_length=res.path_length,
                 optimal_length=optimal,
                 excess=res.path_length / optimal - 1 if success and optimal > 0 else math.nan,
@@ -332,51 +340,45 @@ def live(
                 unfamiliar=float(res.counters.get("unfamiliar", math.nan)),
                 grown=int(res.counters.get("grown", 0)),
                 options=0 if causal is None else causal.map.n_options,
+                strategy=run.strategy,
             )  # fmt: skip
         )
-    if config.maps is not None:
-        steering = getattr(agent, "steering", None)
-        causal = getattr(steering, "causal", None)
-        if causal is not None:
-            Path(config.maps).mkdir(parents=True, exist_ok=True)
-            causal.save(causal_map_path(config.maps, name, config.family, life, config.seed),
-                        world=ident, capabilities=config.capabilities_sha)  # fmt: skip
+    causal = getattr(steering, "causal", None)
+    if config.maps is not None and causal is not None:
+        Path(config.maps).mkdir(parents=True, exist_ok=True)
+        causal.save(causal_map_path(config.maps, run, config.family, life, config.seed),
+                    world=ident, capabilities=config.capabilities_sha)  # fmt: skip
     return rows
 
 
 def run_life(
-    config: LifelongConfig, life: int, todo: list[tuple[str, str]]
-) -> list[tuple[str, str, list[LifeResult]]]:
+    config: LifelongConfig, group: Any, life: int, todo: list[Series]
+) -> list[tuple[Series, list[LifeResult]]]:
     """World ``life``: its tasks drawn and their optima computed once, then the life of
-    each (run_id, method) in ``todo``."""
+    each series in ``todo``."""
     check_family_inputs(config.family, config.inputs)
     try:
         sims = draw_life(config.family, life, config.seed, config.tasks,
                          agent_radius=config.agent_radius)  # fmt: skip
     except InvalidWorldError:  # recorded as skipped, so that the run goes on (and ends)
-        return [(rid, name, _skipped(config, name, life)) for rid, name in todo]
+        return [(s, _skipped(config, _arm(s), life)) for s in todo]
     optima = [optimal_to_goal(s) for s in sims]
-    return [(rid, name, live(config, name, life, sims, optima)) for rid, name in todo]
+    return [(s, live(config, _arm(s), life, sims, optima)) for s in todo]
 
 
-def _skipped(config: LifelongConfig, name: str, life: int) -> list[LifeResult]:
+def _skipped(config: LifelongConfig, run: MethodRun, life: int) -> list[LifeResult]:
     """The rows of a life whose world has no valid chain of tasks (counted in no rate)."""
     nan = math.nan
     return [
         LifeResult(
             world=world_identity(config.family, life, config.seed), life=life, task=t,
-            seed=config.seed, family=config.family, sensing=LIFELONG_METHODS[name].sensing,
+            seed=config.seed, family=config.family, sensing=run.sensing,
             outcome="skipped", success=False, steps=0, path_length=nan, optimal_length=nan,
             excess=nan, decision_us=nan, unfamiliar=nan, grown=0, options=0,
+            strategy=run.strategy,
         )  # fmt: skip
         for t in range(config.tasks)
     ]
-
-
-def run_lives(
-    config: LifelongConfig, items: list[tuple[int, list[tuple[str, str]]]]
-) -> list[tuple[str, str, list[LifeResult]]]:
-    return [row for life, todo in items for row in run_life(config, life, todo)]
 
 
 def run_lifelong(
@@ -386,47 +388,11 @@ def run_lifelong(
     workers: int = 1,
     scheduler: str | None = None,
     progress: Callable[[int, int], None] | None = None,
-) -> dict[str, str]:
+) -> dict[MethodRun, str]:
     """Run (or resume) Experiment 3 into the results file ``output``; returns the run id
-    of each method."""
-    from copi.experiments.store import ResultsStore
-
+    of each arm."""
     config = config.resolved()
-    runs: dict[str, str] = {}
-    with ResultsStore(output) as store:
-        missing: dict[int, list[tuple[str, str]]] = {}
-        total = 0
-        for name in config.methods:
-            rid = config.run_id(name)
-            runs[name] = rid
-            store.begin(rid, "lifelong", name, config.identity(name))
-            done = store.done(rid, name, table="lifelong")
-            for w in range(config.worlds):
-                total += 1
-                if w not in done:
-                    missing.setdefault(w, []).append((rid, name))
-        items = sorted(missing.items())
-        tally = Tally(total - sum(len(t) for _, t in items), total)
-        if progress is not None:
-            progress(tally.finished, total)
-
-        def commit(rows: list[tuple[str, str, list[LifeResult]]]) -> None:
-            for rid, name, life_rows in rows:
-                if life_rows:
-                    store.add_life(rid, "lifelong", name, life_rows)
-                tally.finished += 1
-            if progress is not None:
-                progress(tally.finished, total)
-
-        if not items:
-            return runs
-
-        def saved() -> int:
-            return sum(len(store.done(rid, m, table="lifelong")) for m, rid in runs.items())
-
-        execute(
-            config, items, one=lambda c, item: run_life(c, *item), many=run_lives,
-            commit=commit, workers=workers, scheduler=scheduler, chunk=1,
-            stopping=stops_cleanly(tally, output, "lives", saved),
-        )  # fmt: skip
-    return runs
+    series = config.series()
+    run_series(config, output, series, work=run_life, unit="lives", workers=workers,
+               scheduler=scheduler, progress=progress, chunk=1)  # fmt: skip
+    return {run: s.run_id for run, s in zip(config.methods, series, strict=True)}

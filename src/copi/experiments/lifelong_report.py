@@ -16,7 +16,8 @@ import numpy as np
 from copi._files import save_figure, write_text
 from copi.experiments.benchmark_report import PairedDifference
 from copi.experiments.figures import _figure
-from copi.experiments.lifelong import LIFELONG_METHODS
+from copi.experiments.lifelong import LIFELONG_METHODS, REFERENCE
+from copi.experiments.methods import MethodRun
 from copi.experiments.store import ResultsStore
 
 __all__ = [
@@ -26,8 +27,13 @@ __all__ = [
     "write_lifelong_report",
 ]
 
-CAUSAL = "copi-learnt+causal"
-"""The method every other row is paired against."""
+CAUSAL = REFERENCE.label
+"""The arm every other row is paired against."""
+CONTINUAL = "copi-learnt-continual@sensor:causal"
+
+
+def _label(r: Any) -> str:
+    return MethodRun(r["method"], r["sensing"], r["strategy"]).label
 
 
 def lifelong_blocks(tasks: int) -> tuple[range, range]:
@@ -37,7 +43,7 @@ def lifelong_blocks(tasks: int) -> tuple[range, range]:
     return range(0, k), range(tasks - k, tasks)
 
 
-def _stat(rows: list[dict[str, Any]], what: str) -> float:
+def _stat(rows: list[Any], what: str) -> float:
     if not rows:
         return math.nan
     if what == "success":
@@ -50,8 +56,8 @@ def _stat(rows: list[dict[str, Any]], what: str) -> float:
 
 
 def lives_difference(
-    a: dict[int, list[dict[str, Any]]],
-    b: dict[int, list[dict[str, Any]]],
+    a: dict[int, list[Any]],
+    b: dict[int, list[Any]],
     what: str,
     *,
     resamples: int = 2000,
@@ -64,9 +70,9 @@ def lives_difference(
     if not lives:
         return PairedDifference(math.nan, math.nan, math.nan, 0)
 
-    def pair(ls: list[int]) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
-        xa: list[dict[str, Any]] = []
-        xb: list[dict[str, Any]] = []
+    def pair(ls: list[int]) -> tuple[list[Any], list[Any]]:
+        xa: list[Any] = []
+        xb: list[Any] = []
         for life in ls:
             ta = {r["task"]: r for r in a[life]}
             tb = {r["task"]: r for r in b[life]}
@@ -106,15 +112,15 @@ def _diff(d: PairedDifference) -> str:
     return f"{100 * d.estimate:+.1f} [{100 * d.low:+.1f}, {100 * d.high:+.1f}]"
 
 
-def _by_life(rows: list[dict[str, Any]], tasks: range) -> dict[int, list[dict[str, Any]]]:
-    out: dict[int, list[dict[str, Any]]] = {}
+def _by_life(rows: list[Any], tasks: range) -> dict[int, list[Any]]:
+    out: dict[int, list[Any]] = {}
     for r in rows:
         if r["task"] in tasks:
             out.setdefault(int(r["life"]), []).append(r)
     return out
 
 
-def _figure_lifelong(by_method: dict[str, list[dict[str, Any]]], tasks: int, out: Path) -> Path:
+def _figure_lifelong(by_method: dict[str, list[Any]], tasks: int, out: Path) -> Path:
     fig = _figure(14.0, 3.8)
     ax_s, ax_e, ax_u = fig.subplots(1, 3)
     width = max(1, tasks // 10)  # tasks per point
@@ -186,16 +192,18 @@ def write_lifelong_report(
     return target
 
 
-def _section(
-    rows: list[dict[str, Any]], runs: dict[str, dict[str, Any]], figure: Path
-) -> list[str]:
+def _section(rows: list[Any], runs: dict[str, Any], figure: Path) -> list[str]:
     """The report of the runs of one family, seed and number of tasks."""
     counts: dict[str, int] = {}
-    for run in runs.values():
-        counts[run["method"]] = counts.get(run["method"], 0) + 1
-    by_method: dict[str, list[dict[str, Any]]] = {}
-    for r in rows:  # a method run twice here (e.g. from saved maps) shows each run apart
-        label = r["method"] if counts[r["method"]] == 1 else f"{r['method']} ({r['run_id'][:8]})"
+    arm_of: dict[str, str] = {}
+    for r in rows:
+        arm_of.setdefault(r["run_id"], _label(r))
+    for label in arm_of.values():
+        counts[label] = counts.get(label, 0) + 1
+    by_method: dict[str, list[Any]] = {}
+    for r in rows:  # an arm run twice here (e.g. from saved maps) shows each run apart
+        label = arm_of[r["run_id"]]
+        label = label if counts[label] == 1 else f"{label} ({r['run_id'][:8]})"
         by_method.setdefault(label, []).append(r)
     order = [m for m in LIFELONG_METHODS if m in by_method] + sorted(
         m for m in by_method if m not in LIFELONG_METHODS
@@ -203,6 +211,8 @@ def _section(
     by_method = {m: by_method[m] for m in order}
     tasks = 1 + max(int(r["task"]) for r in rows)
     lives = len({int(r["life"]) for r in rows})
+    per_arm = {m: len({int(r["life"]) for r in rs}) for m, rs in by_method.items()}
+    extents = "" if len(set(per_arm.values())) == 1 else "; fewer for some rows: see lives"
     families = sorted({r["family"] for r in rows})
     early, late = lifelong_blocks(tasks)
     e_name = f"{early.start + 1}–{early.stop}"
@@ -210,25 +220,25 @@ def _section(
     lines = [
         "# Experiment 3 — lifelong",
         "",
-        f"Family {', '.join(families)}; {lives} worlds (lives), {tasks} successive tasks in "
+        f"Family {', '.join(families)}; {lives} worlds (lives{extents}), {tasks} successive "
+        "tasks in "
         "each; every method meets the same tasks (task t starts at task t − 1's goal; "
         "obstacles drawn anew per task). A method keeps from task to task what its row "
         "says. Success and median excess (%) over tasks "
         f"{e_name} and {l_name} of every life; unfamiliar: share of decisions whose "
         "reading was unfamiliar.",
         "",
-        f"| method | sensing | keeps | success {e_name} | success {l_name} | excess {e_name} "
-        f"| excess {l_name} | unfamiliar {e_name} | unfamiliar {l_name} | µs/decision |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+        f"| method | sensing | strategy | keeps | success {e_name} | success {l_name} "
+        f"| excess {e_name} | excess {l_name} | unfamiliar {e_name} | unfamiliar {l_name} "
+        "| µs/decision | lives |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     summary: dict[str, dict[str, float]] = {}
     for name, rs in by_method.items():
-        m = LIFELONG_METHODS.get(name)
-        keeps = "–"
-        if m is not None:
-            keeps = {"causal": "causal map + grid", "mapping": "grid"}.get(m.strategy, "nothing")
-            if m.continual:
-                keeps += " + grown contexts"
+        keeps = {"causal": "causal map + grid", "mapping": "grid"}.get(rs[0]["strategy"],
+                                                                        "nothing")  # fmt: skip
+        if rs[0]["method"].endswith("-continual"):
+            keeps += " + grown contexts"
         a = [r for r in rs if r["task"] in early]
         b = [r for r in rs if r["task"] in late]
         s = {
@@ -245,9 +255,11 @@ def _section(
         )
         bold = f"**{name}**" if name.startswith("copi") else name
         lines.append(
-            f"| {bold} | {rs[0]['sensing']} | {keeps} | {_pct(s['success_early'])} | "
-            f"{_pct(s['success_late'])} | {_pct(s['excess_early'])} | {_pct(s['excess_late'])} "
-            f"| {unf[0]} | {unf[1]} | {s['decision_us']:.0f} |"
+            f"| {bold} | {rs[0]['sensing']} | {rs[0]['strategy']} | {keeps} "
+            f"| {_pct(s['success_early'])} | {_pct(s['success_late'])} "
+            f"| {_pct(s['excess_early'])} | {_pct(s['excess_late'])} "
+            f"| {unf[0]} | {unf[1]} | {s['decision_us']:.0f} | "
+            f"{len({int(r['life']) for r in rs})} |"
         )
     if CAUSAL in by_method:
         ref = _by_life(by_method[CAUSAL], late)
@@ -274,17 +286,18 @@ def _section(
     fig = _figure_lifelong(by_method, tasks, figure)
     lines += [f"![success and excess against task index]({fig.name})", ""]
     lines += ["Runs:", ""]
-    for rid, run in sorted(runs.items(), key=lambda kv: kv[1]["method"]):
+    for rid, run in sorted(runs.items(), key=lambda kv: arm_of.get(kv[0], kv[1]["method"])):
         cfg = run["config"]
         lines.append(
-            f"- {run['method']}: run {rid}, family {cfg.get('family')}, seed {cfg.get('seed')}, "
+            f"- {arm_of.get(rid, run['method'])}: run {rid}, family {cfg.get('family')}, "
+            f"seed {cfg.get('seed')}, "
             f"{cfg.get('tasks')} tasks, copi {cfg.get('code')}"
         )
     return lines + [""]
 
 
 def _goals(
-    s: dict[str, dict[str, float]], by_method: dict[str, list[dict[str, Any]]], late: range
+    s: dict[str, dict[str, float]], by_method: dict[str, list[Any]], late: range
 ) -> list[str]:
     """The issue's goals, measured (each says met or not, with its numbers)."""
     out = ["Goals:", ""]
@@ -309,9 +322,8 @@ def _goals(
             )
         ref = _by_life(by_method[CAUSAL], late)
         beaten = []
-        for name in by_method:
-            m = LIFELONG_METHODS.get(name)
-            if m is None or m.strategy != "mapping":
+        for name, rs in by_method.items():
+            if rs[0]["strategy"] != "mapping":
                 continue
             other = _by_life(by_method[name], late)
             ds = lives_difference(ref, other, "success")
@@ -326,7 +338,7 @@ def _goals(
                 f"(success or median excess, interval excluding zero): {verdict(ok)} "
                 f"(not beaten: {lost})."
             )
-    g = s.get("copi-learnt+causal+continual")
+    g = s.get(CONTINUAL)
     if g is not None and c is not None and not g["unfamiliar_early"] > 0:
         out.append("- continual growth: no unfamiliar readings early in life, nothing to lower.")
     elif g is not None and c is not None:

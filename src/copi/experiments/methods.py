@@ -1,8 +1,42 @@
-"""Every navigating method by name: copi's modes and the baselines, what each knows, what
-in it is learnt, and its parameters (tuned on validation episodes, see ``TUNING``)."""
+"""Every navigating method by name: the registry copi's modes, the baselines and the
+peers are in, and that a user's method joins with one call.
+
+A method is an :class:`~copi.core.Agent` class (or any callable returning one) plus one
+:func:`register_method` call, in the manner of Gymnasium's ``register``::
+
+    from copi.core import Agent
+    from copi.experiments import register_method
+
+    class Eastward(Agent):
+        name = "eastward"
+        def reset(self, task): ...
+        def act(self, obs): return np.array([1.0, 0.0])
+
+    register_method("eastward", Eastward, summary="always east (hand-written)")
+
+after which ``copi benchmark --methods eastward`` runs it on the same episodes as every
+other method. A package makes its methods known to the command line through the entry
+point group ``copi.methods`` (each entry point names a function that registers them;
+see :data:`ENTRY_POINTS`). :func:`copi.testing.check_agent` checks a method keeps the
+contract.
+
+A method's parameters are its factory's keyword defaults (updated by those given at
+registration): a class's defaults are the values the registry and the docs use, tuned
+on validation episodes (``benchmarks/tune.py``, seed 1; the table is docs/tuning.md).
+
+In an experiment a method runs at a sensing level with a global strategy: an *arm*,
+written ``NAME[@LEVEL][:STRATEGY]`` on the command line (:func:`parse_methods`), whose
+three fields are stored apart in every result row.
+"""
 
 from __future__ import annotations
 
+import importlib.metadata
+import inspect
+import json
+import re
+import threading
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -12,325 +46,490 @@ from copi.baselines import (
     VFH,
     CompassGuard,
     NavgroundAgent,
-    NavgroundMissingError,
     Replan,
     Straight,
     TangentBug,
     navground_available,
 )
-from copi.errors import InvalidArgumentError
-from copi.learning import Capabilities, LearnParams
-from copi.online import SENSING_LEVELS, Agent, CopiAgent, LearntAgent, check_sensing
+from copi.core import SENSING_LEVELS, Agent, Sensing, check_sensing, check_strategy
+from copi.errors import CopiError, InvalidArgumentError
+from copi.learning import Capabilities
+from copi.online import CopiAgent, LearntAgent
 
 __all__ = [
     "ABLATIONS",
-    "CAPABILITY_PRESETS",
-    "PRESETS",
-    "Preset",
-    "check_method_capabilities",
-    "check_preset_capabilities",
-    "preset",
-    "METHODS",
+    "ENTRY_POINTS",
+    "LEGACY_NAMES",
+    "MethodRun",
     "MethodSpec",
+    "PluginError",
+    "check_method_capabilities",
+    "default_methods",
     "make_agent",
+    "method_names",
     "method_spec",
     "parse_methods",
+    "register_method",
+    "split_legacy_name",
+    "unregister_method",
 ]
 
+ENTRY_POINTS = "copi.methods"
+"""Entry-point group of third-party methods: each entry point names a callable taking no
+argument that registers methods (``register_method``) when called. In ``pyproject.toml``::
 
-@dataclass(frozen=True)
-class Preset:
-    """One of copi's modes, whole: what ``copi learn --preset NAME`` learns and what
-    ``copi evaluate`` / ``copi pursuit --preset NAME`` then run with it."""
+    [project.entry-points."copi.methods"]
+    mine = "my_package.copi_plugin:register"
+"""
 
-    name: str
-    learn: LearnParams
-    """The capabilities it learns (seed 0 unless told otherwise)."""
-    method: str
-    """The method ``evaluate --preset`` runs."""
-    guard: float
-    """The hand-written guard's reach (0: none)."""
-    summary: str
+_NAME = re.compile(r"^[a-z0-9][a-z0-9_.-]*$")
+"""A method's name: lower-case letters, digits, ``-``, ``_``, ``.`` (``@``, ``:``, ``+``
+and ``/`` belong to the command line's grammar, never to a name)."""
 
 
-PRESETS: dict[str, Preset] = {
-    p.name: p
-    for p in [
-        Preset("faithful", LearnParams(directions=4), "copi-faithful", 0.0,
-               "the paper's chain: 4 compass policies per template, no guard"),
-        Preset("extended", LearnParams(directions=16), "copi-extended", 1.2,
-               "16 policies per template, each checked against the live reading by a "
-               "hand-written guard of 1.2 (agent radius, an obstacle's step, a margin)"),
-        Preset("learnt", LearnParams(directions=16, safety=True), "copi-learnt", 1.05,
-               "every compass direction scored by the route and by learnt safety (a network "
-               "over the reading turned to the direction, trained on counterfactual probes "
-               "of a task-free exploration); compass-guard's hand-written guard as a filter"),
-        Preset("learnt-motion", LearnParams(directions=16, safety=True, motion=True),
-               "copi-learnt+motion", 1.05,
-               "the learnt preset with contexts that see motion (the reading and its change) "
-               "and the per-template safety priors over them added to each move's score"),
-    ]
-}  # fmt: skip
-"""copi's modes; the README says what each knows and what in it is learnt."""
-
-CAPABILITY_PRESETS: dict[str, LearnParams] = {n: p.learn for n, p in PRESETS.items()}
-"""Capabilities each copi mode learns (seed 0 unless told otherwise): the paper's four
-compass policies per template, or sixteen."""
-
-
-def preset(name: str) -> Preset:
-    """A preset by name; an unknown name is refused, listing the known ones."""
-    try:
-        return PRESETS[name]
-    except KeyError:
-        raise InvalidArgumentError(
-            f"preset must be one of {', '.join(PRESETS)}; got {name!r}"
-        ) from None
-
-
-def _check_learnt_like(
-    caps: Capabilities, want: LearnParams, who: str, preset_name: str, where: str
-) -> None:
-    """Refuse capabilities without the safety priors ``want`` asks for, or whose contexts
-    see motion when ``want``'s do not (or the reverse); ``who`` needs them."""
-    if want.safety and caps.safety is None:
-        raise InvalidArgumentError(
-            f"{where} has no safety priors; {who} needs them: learn it with "
-            f"copi learn --preset {preset_name}"
-        )
-    if caps.motion != want.motion:
-        which = "with" if caps.motion else "without"
-        raise InvalidArgumentError(
-            f"{where} was learnt {which} contexts that see motion; {who} needs "
-            f"{'them' if want.motion else 'none'}: learn it with copi learn --preset "
-            f"{preset_name}"
-        )
-
-
-def check_method_capabilities(method: str, caps: Capabilities, where: str = "the file") -> None:
-    """Refuse capabilities that method ``method`` cannot run as it is registered: a learnt
-    method needs safety priors, and its contexts see motion exactly when its preset's do
-    (run otherwise, its results would be another method's under its name)."""
-    spec = method_spec(method)
-    if spec.capabilities is not None:
-        _check_learnt_like(caps, CAPABILITY_PRESETS[spec.capabilities], method,
-                           spec.capabilities, where)  # fmt: skip
-
-
-def check_preset_capabilities(name: str, caps: Capabilities, where: str = "the file") -> None:
-    """Refuse capabilities that were not learnt the way preset ``name`` needs, with one
-    line saying how to learn the right ones."""
-    want = preset(name).learn
-    _check_learnt_like(caps, want, f"preset {name}", name, where)
-    have = int(caps.policies.passable.shape[1])
-    if have != want.directions:
-        raise InvalidArgumentError(
-            f"{where} was learnt with {have} directions; preset {name} needs "
-            f"{want.directions}: learn it with copi learn --preset {name}"
-        )
+class PluginError(CopiError):
+    """A third-party entry point cannot be loaded or registers something invalid."""
 
 
 @dataclass(frozen=True)
 class MethodSpec:
-    """A method: how to build it, what it needs, what it is."""
+    """A registered method: how to build it, what it needs, what it is."""
 
     name: str
-    sensing: str
+    factory: Callable[..., Agent]
+    """Called as ``factory(**params)``, or ``factory(capabilities, **params)`` for a
+    method that runs on capabilities."""
+    sensing: Sensing
     """The least sensing level it needs."""
-    levels: tuple[str, ...]
-    """Levels it runs at in the benchmark by default."""
+    levels: tuple[Sensing, ...]
+    """Levels it runs at in the benchmark when its name is given alone."""
     summary: str
     """What it is, learnt versus hand-written."""
     params: dict[str, Any] = field(default_factory=dict)
-    """Its parameters (tuned values where tuned)."""
+    """Its parameters (JSON-able): the factory's keyword defaults, updated at
+    registration. Part of every run's identity."""
     capabilities: str | None = None
-    """The capability preset it needs (copi's modes), else None."""
-    optional: bool = False
-    """Needs an optional extra (navground)."""
+    """The capability preset it runs on (copi's modes), else None."""
+    requires: str | None = None
+    """The optional extra it needs ("peers": navground; "rl": the RL extra), else None."""
+    available: Callable[[], bool] = field(default=lambda: True, compare=False, repr=False)
+    """Whether what it needs is installed."""
     ablation: bool = False
-    """An ablation of a copi mode: run when asked (``--methods ablations``), not by default."""
+    """An ablation of a copi mode: run when asked (``--methods ablations``)."""
+    default: bool = False
+    """Run by the benchmark when no method is named (copi's reference set)."""
+    bound: bool = False
+    """A bound on what is possible (a ceiling), not a method: marked so in every table."""
 
-    @property
-    def available(self) -> bool:
-        return not self.optional or navground_available()
-
-
-_MAP_AND_SENSOR = ("sensor", "map")
-
-# Every registered parameter below was tuned by benchmarks/tune.py (validation seed 1,
-# all five families, 40 episodes each, four settings per method; the table is
-# docs/tuning.md). navground's ORCA was not tuned.
-_NAVGROUND_MARGIN = {"navground-hrvo": 0.6, "navground-hl": 0.3}
-_LEARNT: dict[str, Any] = {"guard": 1.05, "alpha": 2.0, "beta": 0.0, "wait": False}
-_BETA_PRIORS = 0.5
-_BETA_MOTION = 0.25
-"""Weights of the template priors in the ablations that use them: each chosen among 0.25,
-0.5, 1 and 2 by benchmarks/tune.py (validation seed 1; the table is docs/tuning.md)."""
-_PERSIST = 0.05
-"""Persistence bonus of copi-learnt+persist (the smaller of the two validated, see the
-README: the larger cost up to 5 points of success)."""
-
-METHODS: dict[str, MethodSpec] = {
-    spec.name: spec
-    for spec in [
-        MethodSpec(
-            "copi-faithful", "sensor", _MAP_AND_SENSOR,
-            "the paper's chain: learnt contexts, landmarks, symmetry and 4 A* policies per "
-            "template; no hand-written avoidance",
-            {"guard": 0.0}, capabilities="faithful",
-        ),
-        MethodSpec(
-            "copi-extended", "sensor", _MAP_AND_SENSOR,
-            "the chain with 16 policies per template; each candidate checked against the live "
-            "reading by a hand-written guard, which escapes when none is safe",
-            {"guard": 1.2}, capabilities="extended",
-        ),
-        MethodSpec(
-            "copi-learnt", "sensor", _MAP_AND_SENSOR,
-            "16 compass moves scored by the route and by learnt safety (a network over the "
-            "reading turned to each move, trained on counterfactual probes of a task-free "
-            "exploration, shared by every direction through the symmetry); compass-guard's "
-            "hand-written guard kept as a filter",
-            _LEARNT, capabilities="learnt",
-        ),
-        # The learnt preset's ablations: +priors and +persist differ from copi-learnt in
-        # one thing each, +motion from +priors in one (its contexts); compass-guard is
-        # copi-learnt with nothing learnt (alpha = beta = 0).
-        MethodSpec(
-            "copi-learnt+priors", "sensor", _MAP_AND_SENSOR,
-            "copi-learnt plus the per-template safety priors (contexts of the reading "
-            "alone, each move read through the template's symmetry) in each move's score",
-            {**_LEARNT, "beta": _BETA_PRIORS}, capabilities="learnt", ablation=True,
-        ),
-        MethodSpec(
-            "copi-learnt+motion", "sensor", _MAP_AND_SENSOR,
-            "copi-learnt+priors with contexts that see motion: context map, landmarks, "
-            "templates and their priors over [reading, its change]",
-            {**_LEARNT, "beta": _BETA_MOTION}, capabilities="learnt-motion", ablation=True,
-        ),
-        MethodSpec(
-            "copi-learnt+persist", "sensor", _MAP_AND_SENSOR,
-            "copi-learnt whose last move scores more while the reading stays within its "
-            "landmark (policies that last, paper §V)",
-            {**_LEARNT, "persist": _PERSIST}, capabilities="learnt", ablation=True,
-        ),
-        MethodSpec(
-            "straight", "sensor", _MAP_AND_SENSOR,
-            "the global direction, no avoidance (hand-written, nothing tuned)",
-        ),
-        MethodSpec(
-            "compass-guard", "sensor", _MAP_AND_SENSOR,
-            "copi-extended's hand-written guard over 16 compass moves, no capabilities "
-            "(ablation of the learnt part)",
-            {"guard": 1.05},
-        ),
-        MethodSpec(
-            "vfh", "sensor", _MAP_AND_SENSOR,
-            "Vector Field Histogram (VFH+) on the ranges (hand-written)",
-            {"threshold": 0.5, "safety": 0.5},
-        ),
-        MethodSpec(
-            "dwa", "sensor", _MAP_AND_SENSOR,
-            "Dynamic Window: sampled velocities scored on the ranges (hand-written)",
-            {"margin": 0.9, "clearance_weight": 0.3},
-        ),
-        MethodSpec(
-            "tangent-bug", "sensor", _MAP_AND_SENSOR,
-            "TangentBug on the ranges (hand-written)",
-            {"margin": 0.5, "follow": 1.0},
-        ),
-        MethodSpec(
-            "replan", "oracle", ("oracle",),
-            "shortest path on the current snapshot, obstacles inflated, re-planned "
-            "(hand-written; sees every obstacle)",
-            {"inflate": 0.6},
-        ),
-        *[
-            MethodSpec(
-                name, "oracle", ("oracle",),
-                f"navground's {behavior} (sees obstacle positions and velocities)",
-                {"safety_margin": _NAVGROUND_MARGIN.get(name, 0.3), "horizon": 5.0},
-                optional=True,
+    def make(self, capabilities: Capabilities | None = None, **params: Any) -> Agent:
+        """A fresh agent with the registered parameters, updated by ``params``."""
+        unknown = sorted(set(params) - set(self.params))
+        if unknown:
+            raise InvalidArgumentError(
+                f"{self.name} has no parameter {', '.join(unknown)}; its parameters are "
+                f"{', '.join(sorted(self.params)) or 'none'}"
             )
-            for name, behavior in NAVGROUND_BEHAVIORS.items()
-        ],
-    ]
-}  # fmt: skip
-"""The registry: copi's modes first, then the baselines and peers."""
+        p = {**self.params, **params}
+        if self.capabilities is not None:
+            if capabilities is None:
+                raise InvalidArgumentError(f"{self.name} needs a capabilities file")
+            agent = self.factory(capabilities, **p)
+        else:
+            agent = self.factory(**p)
+        if not isinstance(agent, Agent):
+            raise InvalidArgumentError(
+                f"the factory of {self.name} returned a {type(agent).__name__}, not a "
+                "copi.core.Agent"
+            )
+        agent.name = self.name
+        return agent
 
-DEFAULT_METHODS = tuple(
-    n for n, s in METHODS.items() if n != "navground-orca" and not s.ablation
-)
-"""Methods the benchmark runs unless told otherwise (navground's ORCA is optional; the
-ablations run when asked)."""
 
-ABLATIONS = ("copi-learnt", *(n for n, s in METHODS.items() if s.ablation), "compass-guard")
-"""What ``--methods ablations`` stands for: copi-learnt, each of its ablations, and
-compass-guard (copi-learnt with nothing learnt)."""
+_REGISTRY: dict[str, MethodSpec] = {}
+_LOCK = threading.Lock()
+_plugins: str = "no"  # "no", "loading", "yes"
+
+
+def _json_default(v: Any) -> bool:
+    try:
+        json.dumps(v)
+    except (TypeError, ValueError):
+        return False
+    return v is not None
+
+
+def _signature_params(factory: Callable[..., Any], skip_first: bool) -> dict[str, Any]:
+    """The factory's keyword parameters with JSON-able defaults (``name`` aside)."""
+    try:
+        sig = inspect.signature(factory)
+    except (TypeError, ValueError):
+        return {}
+    params = list(sig.parameters.values())
+    if skip_first and params:
+        params = params[1:]
+    return {
+        p.name: p.default
+        for p in params
+        if p.name != "name"
+        and p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)
+        and p.default is not p.empty
+        and _json_default(p.default)
+    }
+
+
+def register_method(
+    name: str,
+    factory: Callable[..., Agent],
+    *,
+    sensing: Sensing = "sensor",
+    levels: Iterable[Sensing] | None = None,
+    summary: str = "",
+    params: dict[str, Any] | None = None,
+    capabilities: str | None = None,
+    requires: str | None = None,
+    available: Callable[[], bool] | None = None,
+    ablation: bool = False,
+    default: bool = False,
+    bound: bool = False,
+    replace: bool = False,
+) -> MethodSpec:
+    """Register method ``name``: ``factory`` builds its :class:`~copi.core.Agent`.
+
+    Parameters
+    ----------
+    name : str
+        Lower-case letters, digits, ``-``, ``_`` and ``.``.
+    factory : callable
+        An Agent class, or a function returning an Agent; called with ``params`` as
+        keywords (and the capabilities first, for ``capabilities``).
+    sensing : {"sensor", "map", "oracle"}
+        The least level the method needs.
+    levels : levels it runs at when named alone (default: ``sensor`` and ``map`` for a
+        sensor-level method, else its own level).
+    summary : what it is, learnt versus hand-written (shown in every method table).
+    params : parameters to pass, over the factory's keyword defaults.
+    capabilities : the capability preset it runs on (``faithful``, ``learnt``, ...).
+    requires, available : an optional extra it needs, and whether it is installed.
+    ablation, default, bound : see :class:`MethodSpec`.
+    replace : register over an existing method of that name (otherwise refused, unless
+        it is the same registration again).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from copi.core import Agent
+    >>> class Still(Agent):
+    ...     def __init__(self, *, speed=0.0): self.speed = speed
+    ...     def reset(self, task): pass
+    ...     def act(self, obs): return np.array([self.speed, 0.0])
+    >>> spec = register_method("doc-still", Still, summary="stands still", replace=True)
+    >>> spec.params, spec.levels, make_agent("doc-still").name
+    ({'speed': 0.0}, ('sensor', 'map'), 'doc-still')
+    >>> unregister_method("doc-still")
+    """
+    if not isinstance(name, str) or not _NAME.match(name):
+        raise InvalidArgumentError(
+            f"a method's name must be lower-case letters, digits, '-', '_' or '.'; got {name!r}"
+        )
+    if not callable(factory):
+        raise InvalidArgumentError(f"the factory of {name} must be callable; got {factory!r}")
+    check_sensing(sensing)
+    chosen: tuple[Sensing, ...] = (
+        (("sensor", "map") if sensing == "sensor" else (sensing,))
+        if levels is None
+        else tuple(levels)
+    )
+    for lv in chosen:
+        check_sensing(lv, sensing, method=name)
+    extra = dict(params or {})
+    for key, value in extra.items():
+        if not _json_default(value) and value is not None:
+            raise InvalidArgumentError(
+                f"parameter {key} of {name} must be JSON-able; got {value!r}"
+            )
+    merged = {**_signature_params(factory, capabilities is not None), **extra}
+    spec = MethodSpec(
+        name=name, factory=factory, sensing=sensing, levels=chosen, summary=summary,
+        params=merged, capabilities=capabilities, requires=requires,
+        available=available or (lambda: True), ablation=ablation, default=default,
+        bound=bound,
+    )  # fmt: skip
+    with _LOCK:
+        old = _REGISTRY.get(name)
+        if old is not None and not replace:
+            same = old.factory is factory and old.params == spec.params
+            if not same:
+                raise InvalidArgumentError(
+                    f"a method named {name!r} is registered already; pass replace=True to "
+                    "register over it"
+                )
+            return old
+        _REGISTRY[name] = spec
+    return spec
+
+
+def unregister_method(name: str) -> None:
+    """Remove a registered method (e.g. one a test registered); copi's own stay."""
+    if name in _BUILTIN:
+        raise InvalidArgumentError(f"{name} is one of copi's own methods; it stays registered")
+    with _LOCK:
+        _REGISTRY.pop(name, None)
+
+
+def _load_plugins() -> None:
+    """Call every entry point of :data:`ENTRY_POINTS`, once per process."""
+    global _plugins
+    if _plugins != "no":
+        return
+    _plugins = "loading"
+    try:
+        for ep in importlib.metadata.entry_points(group=ENTRY_POINTS):
+            try:
+                hook = ep.load()
+                if callable(hook):
+                    hook()
+            except CopiError as exc:
+                raise PluginError(
+                    f"entry point {ep.name!r} ({ep.value}) of {ENTRY_POINTS}: {exc}"
+                ) from None
+            except Exception as exc:
+                raise PluginError(
+                    f"entry point {ep.name!r} ({ep.value}) of {ENTRY_POINTS} cannot be "
+                    f"loaded ({type(exc).__name__}: {exc})"
+                ) from None
+    finally:
+        _plugins = "yes"
+
+
+def method_names() -> tuple[str, ...]:
+    """Every registered method's name, copi's modes first, then the baselines, peers and
+    bounds, then those of other packages (in the order registered)."""
+    _load_plugins()
+    return tuple(_REGISTRY)
 
 
 def method_spec(name: str) -> MethodSpec:
     """The spec of a method by name; an unknown name is refused, listing the known ones."""
-    try:
-        return METHODS[name]
-    except KeyError:
+    spec = _REGISTRY.get(name)
+    if spec is None:
+        _load_plugins()
+        spec = _REGISTRY.get(name)
+    if spec is None:
+        legacy = LEGACY_NAMES.get(name)
+        hint = f" (now {legacy!r})" if legacy else ""
         raise InvalidArgumentError(
-            f"method must be one of {', '.join(METHODS)}; got {name!r}"
-        ) from None
-
-
-def parse_methods(text: str | None) -> list[tuple[str, str]]:
-    """``"dwa,copi-extended@map"`` -> [(method, level), ...]: a bare name stands for
-    every level the method runs at by default; ``name@level`` for one level (checked
-    against what the method needs); ``ablations`` for :data:`ABLATIONS`. None: every
-    default method at its levels."""
-    items = DEFAULT_METHODS if text is None else [t.strip() for t in text.split(",") if t.strip()]
-    items = [m for item in items for m in (ABLATIONS if item == "ablations" else (item,))]
-    if not items:
-        raise InvalidArgumentError("methods must name at least one method; got none")
-    out: list[tuple[str, str]] = []
-    for item in items:
-        name, _, level = item.partition("@")
-        spec = method_spec(name)
-        levels = [level] if level else list(spec.levels)
-        for lv in levels:
-            check_sensing(lv, spec.sensing, method=name)
-            if (name, lv) not in out:
-                out.append((name, lv))
-    order = {n: i for i, n in enumerate(METHODS)}
-    return sorted(out, key=lambda m: (order[m[0]], SENSING_LEVELS.index(m[1])))
+            f"method must be one of {', '.join(method_names())}; got {name!r}{hint}"
+        )
+    return spec
 
 
 def make_agent(name: str, capabilities: Capabilities | None = None, **params: Any) -> Agent:
     """A fresh agent of method ``name`` with its registered parameters, updated by
     ``params``; copi's modes need their ``capabilities``."""
     spec = method_spec(name)
-    p = {**spec.params, **params}
-    if spec.capabilities is not None:
-        if capabilities is None:
-            raise InvalidArgumentError(f"{name} needs a capabilities file")
-        if CAPABILITY_PRESETS[spec.capabilities].safety:  # the learnt presets
-            return LearntAgent(capabilities, name=name, guard=float(p["guard"]),
-                               alpha=float(p["alpha"]), beta=float(p["beta"]),
-                               wait=bool(p["wait"]),
-                               continual=bool(p.get("continual", False)),
-                               grow_every=int(p.get("grow_every", 20)),
-                               persist=float(p.get("persist", 0.0)))  # fmt: skip
-        return CopiAgent(capabilities, name=name, guard=float(p.get("guard", 0.0)),
-                         continual=bool(p.get("continual", False)))  # fmt: skip
-    if spec.optional and not navground_available():
-        raise NavgroundMissingError(
-            f"{name} needs navground, which is not installed: pip install 'copi[peers]'"
+    if not spec.available():
+        raise InvalidArgumentError(
+            f"{name} needs the optional extra {spec.requires!r}, which is not installed: "
+            f"pip install 'copi[{spec.requires}]'"
         )
-    factories: dict[str, Any] = {
-        "straight": Straight,
-        "compass-guard": CompassGuard,
-        "vfh": VFH,
-        "dwa": DWA,
-        "tangent-bug": TangentBug,
-        "replan": Replan,
-    }
-    if name in NAVGROUND_BEHAVIORS:
-        return NavgroundAgent(NAVGROUND_BEHAVIORS[name], **p)
-    agent: Agent = factories[name](**p)
-    return agent
+    return spec.make(capabilities, **params)
+
+
+def default_methods() -> tuple[str, ...]:
+    """What the benchmark runs unless told otherwise."""
+    return tuple(n for n in method_names() if _REGISTRY[n].default)
+
+
+# -- arms: a method at a level with a global strategy ---------------------------------
+
+
+@dataclass(frozen=True, order=True)
+class MethodRun:
+    """A method run at a sensing level with a global strategy (an experiment's arm)."""
+
+    method: str
+    sensing: Sensing
+    strategy: str = "route"
+    """"route" at levels with a map (the static route); at ``sensor`` one of
+    :data:`copi.core.SENSOR_STRATEGIES`."""
+
+    @property
+    def label(self) -> str:
+        """``method@sensing``, and ``:strategy`` at level sensor: ``dwa@map``,
+        ``dwa@sensor:greedy``, ``copi-learnt@sensor:causal`` (the syntax
+        :func:`parse_methods` reads)."""
+        text = f"{self.method}@{self.sensing}"
+        return text + (f":{self.strategy}" if self.sensing == "sensor" else "")
+
+
+ABLATIONS = ("copi-learnt", "copi-learnt-priors", "copi-learnt-motion", "copi-learnt-persist",
+             "compass-guard")  # fmt: skip
+"""What ``--methods ablations`` stands for: copi-learnt, each of its ablations, and
+compass-guard (copi-learnt with nothing learnt)."""
+
+
+def parse_methods(
+    text: str | None, *, strategy: str = "greedy", defaults: Iterable[str] | None = None
+) -> list[MethodRun]:
+    """``"dwa,copi-learnt@map,dwa@sensor:mapping"`` -> arms.
+
+    ``NAME`` alone stands for every level the method runs at by default; ``@LEVEL`` for
+    one level (checked against what the method needs); ``:STRATEGY`` sets the global
+    strategy at level ``sensor`` (default ``strategy``; at ``map`` and ``oracle`` the
+    route). ``ablations`` stands for :data:`ABLATIONS`; None for ``defaults`` (the
+    benchmark's methods, :func:`default_methods`).
+
+    Examples
+    --------
+    >>> [r.label for r in parse_methods("dwa@sensor:mapping,straight@map")]
+    ['straight@map', 'dwa@sensor:mapping']
+    """
+    check_strategy(strategy)
+    if text is None:
+        items = list(default_methods() if defaults is None else defaults)
+    else:
+        items = [t.strip() for t in text.split(",") if t.strip()]
+    items = [m for item in items for m in (ABLATIONS if item == "ablations" else (item,))]
+    if not items:
+        raise InvalidArgumentError("methods must name at least one method; got none")
+    out: list[MethodRun] = []
+    for item in items:
+        head, _, strat = item.partition(":")
+        name, _, level = head.partition("@")
+        spec = method_spec(name)
+        levels = [level] if level else list(spec.levels)
+        if strat:
+            check_strategy(strat)
+        for lv in levels:
+            check_sensing(lv, spec.sensing, method=name)
+            if lv != "sensor" and strat:
+                raise InvalidArgumentError(
+                    f"{item}: a global strategy is chosen at level sensor only (at {lv} the "
+                    "method follows the route)"
+                )
+            run = MethodRun(name, lv, (strat or strategy) if lv == "sensor" else "route")  # type: ignore[arg-type]
+            if run not in out:
+                out.append(run)
+    order = {n: i for i, n in enumerate(method_names())}
+    return sorted(out, key=lambda r: (order[r.method], SENSING_LEVELS.index(r.sensing),
+                                      r.strategy))  # fmt: skip
+
+
+LEGACY_NAMES = {
+    "copi-learnt+priors": "copi-learnt-priors",
+    "copi-learnt+motion": "copi-learnt-motion",
+    "copi-learnt+persist": "copi-learnt-persist",
+}
+"""Method names of stores written by copi 0.2 and their names now."""
+
+_LEGACY_LIFELONG = {
+    "copi-learnt+causal": ("copi-learnt", "sensor", "causal"),
+    "copi-learnt+causal+continual": ("copi-learnt-continual", "sensor", "causal"),
+    "copi-learnt+mapping": ("copi-learnt", "sensor", "mapping"),
+    "compass-guard+mapping": ("compass-guard", "sensor", "mapping"),
+    "dwa+mapping": ("dwa", "sensor", "mapping"),
+    "copi-learnt@map": ("copi-learnt", "map", "route"),
+}
+
+
+def split_legacy_name(name: str) -> tuple[str, str | None, str | None]:
+    """(method, sensing, strategy) of a method label an older store holds, where the
+    label carried them (``dwa+mapping``, ``copi-learnt@map``); None where it did not.
+
+    Examples
+    --------
+    >>> split_legacy_name("dwa+mapping"), split_legacy_name("copi-learnt+priors")
+    (('dwa', 'sensor', 'mapping'), ('copi-learnt-priors', None, None))
+    """
+    if name in _LEGACY_LIFELONG:
+        return _LEGACY_LIFELONG[name]
+    return LEGACY_NAMES.get(name, name), None, None
+
+
+# -- capabilities each method needs ---------------------------------------------------
+
+
+def check_method_capabilities(method: str, caps: Capabilities, where: str = "the file") -> None:
+    """Refuse capabilities that method ``method`` cannot run as it is registered: they
+    must have been learnt as its preset learns them (directions, safety priors, contexts
+    that see motion); run otherwise, its results would be another method's under its
+    name."""
+    spec = method_spec(method)
+    if spec.capabilities is not None:
+        from copi.experiments.presets import check_preset_capabilities
+
+        check_preset_capabilities(spec.capabilities, caps, where, who=method)
+
+
+# -- copi's modes, the baselines and the peers ----------------------------------------
+
+
+def _navground(behavior: str) -> Callable[..., Agent]:
+    def make(*, safety_margin: float = 0.3, horizon: float = 5.0) -> Agent:
+        return NavgroundAgent(behavior, safety_margin=safety_margin, horizon=horizon)
+
+    make.__name__ = f"navground_{behavior.lower()}"
+    return make
+
+
+def _register_builtins() -> None:
+    # Every parameter below equals its class's default: tuned by benchmarks/tune.py
+    # (validation seed 1, all five families, 40 episodes each, four settings per method;
+    # the table is docs/tuning.md). navground's ORCA was not tuned.
+    reg = register_method
+    reg("copi-faithful", CopiAgent, capabilities="faithful", default=True,
+        summary="the paper's chain: learnt contexts, landmarks, symmetry and 4 A* policies "
+        "per template; no hand-written avoidance")
+    reg("copi-extended", CopiAgent, capabilities="extended", default=True,
+        params={"guard": 1.2},
+        summary="the chain with 16 policies per template; each candidate checked against the "
+        "live reading by a hand-written guard, which escapes when none is safe")
+    reg("copi-learnt", LearntAgent, capabilities="learnt", default=True,
+        summary="16 compass moves scored by the route and by learnt safety (a network over "
+        "the reading turned to each move, trained on counterfactual probes of a task-free "
+        "exploration, shared by every direction through the symmetry); compass-guard's "
+        "hand-written guard kept as a filter")
+    # The learnt preset's ablations: -priors and -persist differ from copi-learnt in one
+    # thing each, -motion from -priors in one (its contexts); compass-guard is copi-learnt
+    # with nothing learnt (alpha = beta = 0). Their weights: docs/tuning.md.
+    reg("copi-learnt-priors", LearntAgent, capabilities="learnt", ablation=True,
+        params={"beta": 0.5},
+        summary="copi-learnt plus the per-template safety priors (contexts of the reading "
+        "alone, each move read through the template's symmetry) in each move's score")
+    reg("copi-learnt-motion", LearntAgent, capabilities="learnt-motion", ablation=True,
+        params={"beta": 0.25},
+        summary="copi-learnt-priors with contexts that see motion: context map, landmarks, "
+        "templates and their priors over [reading, its change]")
+    reg("copi-learnt-persist", LearntAgent, capabilities="learnt", ablation=True,
+        params={"persist": 0.05},
+        summary="copi-learnt whose last move scores more while the reading stays within its "
+        "landmark (policies that last, paper §V)")
+    reg("copi-learnt-continual", LearntAgent, capabilities="learnt",
+        params={"continual": True},
+        summary="copi-learnt growing contexts for unfamiliar readings online (paper §II-A, "
+        "§III); in a lifelong run the grown contexts are kept")
+    reg("straight", Straight, default=True,
+        summary="the global direction, no avoidance (hand-written, nothing tuned)")
+    reg("compass-guard", CompassGuard, default=True,
+        summary="copi-extended's hand-written guard over 16 compass moves, no capabilities "
+        "(ablation of the learnt part)")
+    reg("vfh", VFH, default=True,
+        summary="Vector Field Histogram (VFH+) on the ranges (hand-written)")
+    reg("dwa", DWA, default=True,
+        summary="Dynamic Window: sampled velocities scored on the ranges (hand-written)")
+    reg("tangent-bug", TangentBug, default=True,
+        summary="TangentBug on the ranges (hand-written)")
+    reg("replan", Replan, sensing="oracle", default=True,
+        summary="shortest path on the current snapshot, obstacles inflated, re-planned "
+        "(hand-written; sees every obstacle)")
+    margins = {"navground-hrvo": 0.6, "navground-hl": 0.3, "navground-orca": 0.3}
+    for name, behavior in NAVGROUND_BEHAVIORS.items():
+        reg(name, _navground(behavior), sensing="oracle", requires="peers",
+            available=navground_available, default=name != "navground-orca",
+            params={"safety_margin": margins[name]},
+            summary=f"navground's {behavior} (sees obstacle positions and velocities)")
+    # fmt: skip
+
+
+_register_builtins()
+_BUILTIN = frozenset(_REGISTRY)

@@ -8,17 +8,28 @@ import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import lru_cache
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from copi._rng import check_seed
+from copi.core import Sensing, check_sensing, check_strategy
 from copi.errors import InvalidArgumentError, InvalidWorldError, WorldFileError
-from copi.experiments._episode import EpisodeOutcome, optimal_to_goal, run_agent
-from copi.experiments._runs import RunIdentity, check_family_inputs, file_sha, run_into_store
+from copi.experiments._episode import EpisodeOutcome, optimal_to_goal, run_episode
+from copi.experiments._runs import (
+    MAX_EPISODES,
+    RunIdentity,
+    Series,
+    check_count,
+    check_family_inputs,
+    file_sha,
+    run_series,
+)
 from copi.experiments.methods import check_method_capabilities, make_agent, method_spec
 from copi.geometry._arrays import positive_int
 from copi.learning import Capabilities
-from copi.online import ContextController, LearntAgent, check_sensing, check_strategy
+from copi.online import ContextController, LearntAgent
 from copi.world import (
     RangeSensor,
     Simulator,
@@ -34,9 +45,10 @@ __all__ = [
     "NavigationConfig",
     "draw_episode",
     "evaluate",
+    "evaluate_episode",
+    "evaluate_episodes",
     "result_row",
-    "run_episode",
-    "run_episodes",
+    "world_file_label",
 ]
 
 
@@ -55,7 +67,7 @@ class NavigationConfig(RunIdentity):
     """Worlds to run instead of the family's (episode k uses world k mod n)."""
     family: str = "star"
     """World family of the episodes (:data:`copi.world.FAMILIES`; "star": the paper's)."""
-    sensing: str = "map"
+    sensing: Sensing = "map"
     """Sensing level the method runs at (sensor, map or oracle; see copi.online)."""
     sensor_strategy: str = "greedy"
     """Global strategy at level sensor: "greedy" or "mapping" (see copi.online.Mapping)."""
@@ -85,6 +97,9 @@ class NavigationConfig(RunIdentity):
     def __post_init__(self) -> None:
         for name in ("worlds", "max_steps"):
             positive_int(getattr(self, name), name)
+        check_count(self.worlds, "worlds", MAX_EPISODES)
+        check_count(self.max_steps, "max_steps", 100_000)
+        check_seed(self.seed)
         spec = method_spec(self.method)
         check_sensing(self.sensing, spec.sensing, method=self.method)
         check_strategy(self.sensor_strategy)
@@ -95,13 +110,25 @@ class NavigationConfig(RunIdentity):
         if self.guard is not None and not (math.isfinite(self.guard) and self.guard >= 0):
             raise InvalidArgumentError(f"guard must be a finite number >= 0; got {self.guard!r}")
 
+    @property
+    def row_family(self) -> str:
+        """The family its rows name: the family's, or the world file's label."""
+        if self.world_file is not None:
+            return world_file_label(self.world_file)
+        return self.family
+
+    @property
+    def strategy(self) -> str:
+        """The global strategy of the run's rows: the route at levels with a map."""
+        return self.sensor_strategy if self.sensing == "sensor" else "route"
+
     def agent_params(self) -> dict[str, Any]:
         """The method's parameters as this run sets them."""
         p = dict(method_spec(self.method).params)
         if self.guard is not None and "guard" in p:
             p["guard"] = self.guard
-        if method_spec(self.method).capabilities is not None:
-            p["continual"] = self.continual
+        if "continual" in p:
+            p["continual"] = self.continual or bool(p["continual"])
         return p
 
 
@@ -151,10 +178,24 @@ class EpisodeResult:
     """For recorded episodes: world, path, obstacle traces and radii (JSON-able)."""
     reason: str | None = None
     """Why an episode was skipped (None otherwise)."""
+    strategy: str = "route"
+    """The global strategy: "route" (levels with a map) or the sensor-level one."""
+
+
+def world_file_label(path: str | os.PathLike[str]) -> str:
+    """How a run of a world file names its rows' family: ``file:NAME``."""
+    return f"file:{Path(path).name}"
 
 
 def skipped_row(
-    k: int, seed: int, world: str, reason: str, *, family: str, sensing: str
+    k: int,
+    seed: int,
+    world: str,
+    reason: str,
+    *,
+    family: str,
+    sensing: str,
+    strategy: str = "route",
 ) -> EpisodeResult:
     """The stored row of an episode whose world has no valid task: recorded as such, so
     that a run goes on (and a resumed run does not stop there again)."""
@@ -163,7 +204,7 @@ def skipped_row(
         episode=k, world=world, seed=seed, success=False, reached=False, collided=False,
         timed_out=False, steps=0, contacts=0, path_length=nan, optimal_length=nan,
         excess=nan, decision_us=nan, strategy_us=0.0, unfamiliar=0.0, no_policy=0,
-        family=family, sensing=sensing, outcome="skipped", reason=reason,
+        family=family, sensing=sensing, outcome="skipped", reason=reason, strategy=strategy,
     )  # fmt: skip
 
 
@@ -236,6 +277,7 @@ def result_row(
     *,
     family: str,
     sensing: str,
+    strategy: str = "route",
 ) -> EpisodeResult:
     """The stored row of one agent's episode (``sim`` after the episode)."""
     success = out.outcome == "success"
@@ -278,10 +320,11 @@ def result_row(
         min_clearance=out.min_clearance,
         smoothness=out.smoothness,
         trajectory=trajectory,
+        strategy=strategy,
     )
 
 
-def run_episode(config: NavigationConfig, k: int) -> EpisodeResult:
+def evaluate_episode(config: NavigationConfig, k: int) -> EpisodeResult:
     """Episode k of a run: draw the task, measure the optimum on the frozen snapshot,
     then run the method online. Depends only on (config, k)."""
     spec = method_spec(config.method)
@@ -305,17 +348,19 @@ def run_episode(config: NavigationConfig, k: int) -> EpisodeResult:
             config.family, k, world_file=config.world_file, world_file_sha=config.world_file_sha
         )
         return skipped_row(
-            k, config.seed, name, str(exc), family=config.family, sensing=config.sensing
-        )
+            k, config.seed, name, str(exc), family=config.row_family, sensing=config.sensing,
+            strategy=config.strategy,
+        )  # fmt: skip
     optimal = optimal_to_goal(sim)
     agent = make_agent(config.method, caps, **config.agent_params())
-    out = run_agent(
+    out = run_episode(
         agent, sim, sensing=config.sensing, max_steps=config.max_steps,
         end_on_contact=config.end_on_contact, strategy=config.sensor_strategy,
     )  # fmt: skip
     return result_row(
-        sim, k, config.seed, optimal, out, family=config.family, sensing=config.sensing
-    )
+        sim, k, config.seed, optimal, out, family=config.row_family, sensing=config.sensing,
+        strategy=config.strategy,
+    )  # fmt: skip
 
 
 def check_world_file(path: str | os.PathLike[str], *, agent_radius: float = 0.3) -> None:
@@ -328,9 +373,9 @@ def check_world_file(path: str | os.PathLike[str], *, agent_radius: float = 0.3)
             raise WorldFileError(f"{path}: world {i}: {exc}") from None
 
 
-def run_episodes(config: NavigationConfig, episodes: list[int]) -> list[EpisodeResult]:
+def evaluate_episodes(config: NavigationConfig, episodes: list[int]) -> list[EpisodeResult]:
     """Several episodes in one task (fewer round trips to the workers)."""
-    return [run_episode(config, k) for k in episodes]
+    return [evaluate_episode(config, k) for k in episodes]
 
 
 def evaluate(
@@ -355,17 +400,15 @@ def evaluate(
         )  # fmt: skip
     if config.world_file is not None:
         check_world_file(config.world_file, agent_radius=config.agent_radius)
-    return run_into_store(
-        config,
-        output,
-        experiment="navigation",
-        method=config.method,
-        table="episodes",
-        total=config.worlds,
-        one=run_episode,
-        many=run_episodes,
-        workers=workers,
-        scheduler=scheduler,
-        progress=progress,
-        chunk=16,
-    )
+    run_id = config.run_id()
+    series = Series(run_id, "navigation", config.method, config.identity(), "episodes",
+                    config.worlds)  # fmt: skip
+    run_series(config, output, [series], work=_work, unit="episodes", workers=workers,
+               scheduler=scheduler, progress=progress, chunk=16)  # fmt: skip
+    return run_id
+
+
+def _work(
+    config: NavigationConfig, group: Any, k: int, todo: list[Series]
+) -> list[tuple[Series, EpisodeResult]]:
+    return [(s, evaluate_episode(config, k)) for s in todo]

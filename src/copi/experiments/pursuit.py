@@ -3,6 +3,7 @@ capabilities, in stationary and dynamic worlds."""
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -10,16 +11,26 @@ from typing import Any
 
 import numpy as np
 
+from copi._rng import check_seed
+from copi.core import Observation, Task
 from copi.errors import InvalidArgumentError
-from copi.experiments._runs import RunIdentity, run_into_store
+from copi.experiments._runs import MAX_EPISODES, RunIdentity, Series, check_count, run_series
 from copi.experiments.navigation import _capabilities
 from copi.games import ChauffeurParams
 from copi.games._world_game import ChauffeurGame
 from copi.geometry._arrays import positive_int
-from copi.online import ContextController, LearntAgent, Observation, Task
+from copi.online import ContextController, LearntAgent
 from copi.world import RangeSensor
 
-__all__ = ["EVADERS", "GameRow", "PursuitConfig", "pursue", "run_game", "run_games"]
+__all__ = [
+    "EVADERS",
+    "GameRow",
+    "PursuitConfig",
+    "pursue",
+    "resolve_evader",
+    "run_game",
+    "run_games",
+]
 
 
 EVADERS = ("capability", "learnt", "game")
@@ -67,6 +78,11 @@ class PursuitConfig(RunIdentity):
             )
         for name in ("games", "horizon"):
             positive_int(getattr(self, name), name)
+        check_count(self.games, "games", MAX_EPISODES)
+        check_count(self.horizon, "horizon", 100_000)
+        check_seed(self.seed)
+        if not (math.isfinite(self.guard) and self.guard >= 0):
+            raise InvalidArgumentError(f"guard must be a finite number >= 0; got {self.guard!r}")
         self.params()  # validates gamma and the radii
 
     @property
@@ -175,15 +191,59 @@ def run_game(config: PursuitConfig, k: int) -> GameRow:
     )
 
 
+def resolve_evader(
+    caps: Any,
+    where: str,
+    *,
+    preset: str | None = None,
+    evader: str | None = None,
+    guard: float | None = None,
+) -> tuple[str, float]:
+    """The evader and guard a pursuit run plays with (``copi pursuit``), as
+    :func:`copi.experiments.presets.resolve` settles them for navigation: the preset's
+    (or, without one, the mode the capabilities were learnt for) evader and guard; a
+    ``--guard`` contradicting a preset, an evader the preset does not play, or a file
+    learnt for another mode is refused."""
+    from copi.experiments.presets import PRESETS, check_preset_capabilities, preset_of
+
+    if evader is not None and evader not in EVADERS:
+        raise InvalidArgumentError(f"evader must be one of {', '.join(EVADERS)}; got {evader!r}")
+    name = preset if preset is not None else preset_of(caps)
+    if name == "learnt-motion":
+        raise InvalidArgumentError(
+            "the pursuit game plays presets faithful, extended and learnt; "
+            f"{'got' if preset else where + ' was learnt for'} learnt-motion"
+        )
+    if preset is not None:
+        check_preset_capabilities(preset, caps, where)
+        if guard is not None and guard != PRESETS[preset].guard:
+            raise InvalidArgumentError(
+                f"--guard {guard:g} contradicts --preset {preset} (guard "
+                f"{PRESETS[preset].guard:g})"
+            )
+    learnt = name == "learnt"
+    kind = evader or ("learnt" if learnt else "capability")
+    if kind == "learnt" and not learnt:
+        raise InvalidArgumentError(
+            f"--evader learnt plays the learnt preset's agent; {where} was learnt for "
+            f"{'preset ' + name if name else 'no preset'}: learn it with copi learn --preset "
+            "learnt"
+        )
+    if kind == "capability" and learnt and preset is not None:
+        raise InvalidArgumentError("--preset learnt plays the learnt evader, not --evader "
+                                   "capability")  # fmt: skip
+    base = PRESETS[name].guard if name is not None else PRESETS["extended"].guard
+    return kind, float(base if guard is None else guard)
+
+
 def _learnt_evader(caps: Any, config: PursuitConfig, sensor: RangeSensor) -> LearntAgent:
     """The learnt preset's agent with its registered parameters and this run's guard,
     told a task with no map (it is handed the static reading each step, as the
     capability evader is)."""
-    from copi.experiments.methods import method_spec
+    from copi.experiments.methods import make_agent
 
-    p = method_spec("copi-learnt").params
-    agent = LearntAgent(caps, name="learnt-evader", guard=config.guard, alpha=float(p["alpha"]),
-                        beta=float(p["beta"]), wait=bool(p["wait"]))  # fmt: skip
+    agent = make_agent("copi-learnt", caps, guard=config.guard)
+    assert isinstance(agent, LearntAgent)
     agent.reset(Task(sensing="map", agent_radius=0.3, goal_tolerance=0.0,
                      n_rays=sensor.n_rays, max_range=sensor.max_range))  # fmt: skip
     return agent
@@ -203,17 +263,14 @@ def pursue(
 ) -> str:
     """Run (or resume) Experiment 2 into ``output``; returns the run id."""
     config = config.resolved()
-    return run_into_store(
-        config,
-        output,
-        experiment="pursuit",
-        method=config.method,
-        table="games",
-        total=config.games,
-        one=run_game,
-        many=run_games,
-        workers=workers,
-        scheduler=scheduler,
-        progress=progress,
-        chunk=8,
-    )
+    run_id = config.run_id()
+    series = Series(run_id, "pursuit", config.method, config.identity(), "games", config.games)
+    run_series(config, output, [series], work=_work, unit="games", workers=workers,
+               scheduler=scheduler, progress=progress, chunk=8)  # fmt: skip
+    return run_id
+
+
+def _work(
+    config: PursuitConfig, group: Any, k: int, todo: list[Series]
+) -> list[tuple[Series, GameRow]]:
+    return [(s, run_game(config, k)) for s in todo]

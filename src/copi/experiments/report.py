@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import os
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -15,7 +16,7 @@ from copi.experiments.figures import _figure
 from copi.experiments.store import ResultsStore
 from copi.world import World, draw_world
 
-__all__ = ["summarize", "summarize_games", "warnings_for", "write_report"]
+__all__ = ["Report", "summarize", "summarize_games", "warnings_for", "write_report"]
 
 SUMMARY_COLUMNS = [
     ("method", "method"),
@@ -56,7 +57,7 @@ def warnings_for(method: str, s: dict[str, Any]) -> list[str]:
     return out
 
 
-def summarize(rows: list[dict[str, Any]]) -> dict[str, Any]:
+def summarize(rows: list[Any]) -> dict[str, Any]:
     """Summary of one method's episodes. Excess statistics are over successful episodes
     (reached, no contact), as in the paper. Skipped episodes (no valid task in their
     world) count in no rate; ``skipped`` says how many there were."""
@@ -205,7 +206,7 @@ def _fig4(excess: dict[str, np.ndarray], out: Path) -> Path:
     return target
 
 
-def summarize_games(rows: list[dict[str, Any]]) -> dict[str, Any]:
+def summarize_games(rows: list[Any]) -> dict[str, Any]:
     """Summary of one Experiment 2 method's games."""
     n = len(rows)
     if n == 0:
@@ -276,7 +277,9 @@ def _slug(s: str) -> str:
     return "".join(c if c.isalnum() else "_" for c in s).strip("_").lower() or "run"
 
 
-def write_report(results: list[str | os.PathLike[str]], directory: str | os.PathLike[str]) -> Path:
+def write_report(
+    results: list[str | os.PathLike[str]], directory: str | os.PathLike[str]
+) -> Report:
     """Write ``report.md`` and its figures for one or more results files."""
     out = Path(directory)
     out.mkdir(parents=True, exist_ok=True)
@@ -299,10 +302,16 @@ def write_report(results: list[str | os.PathLike[str]], directory: str | os.Path
                     dtype=float,
                 )
                 cfg = run["config"]
+                where = (
+                    f"the worlds of a world file (content {str(cfg['world_file_sha'])[:12]})"
+                    if cfg.get("world_file_sha") else f"family {cfg.get('family', 'star')}"
+                )  # fmt: skip
+                guard = cfg.get("guard")
                 runs_info.append(
                     f"- **{label}** (`{Path(path).name}`, run {run['run_id']}): {cfg['worlds']} "
-                    f"episodes, seed {cfg['seed']}, family {cfg.get('family', 'star')}, "
-                    f"sensing {cfg.get('sensing', 'map')}, guard {cfg.get('guard')}, "
+                    f"episodes, seed {cfg['seed']}, {where}, "
+                    f"sensing {cfg.get('sensing', 'map')}, "
+                    f"guard {'the method’s' if guard is None else guard}, "
                     f"max steps {cfg['max_steps']}, contact ends episode "
                     f"{cfg.get('end_on_contact', False)}; copi {run['versions'].get('copi')}"
                     + (f"; {s['skipped']} episodes skipped (no valid task)" if s["skipped"] else "")
@@ -348,11 +357,14 @@ def write_report(results: list[str | os.PathLike[str]], directory: str | os.Path
     if summaries:
         figures.append(_fig4(excess, out))
     fig5 = _fig5(game_traj, out)
+    summaries_md: dict[str, str] = {}
     lines = []
     if summaries:
-        lines += _experiment1_lines(summaries, runs_info, figures)
+        head, rest = _experiment1_lines(summaries, runs_info, figures)
+        summaries_md["Experiment 1"] = "\n".join(head)
+        lines += head + rest
     if games:
-        lines += [
+        head = [
             "# Experiment 2 — the homicidal chauffeur",
             "",
             "The evader plays the game's strategy; the capability evader instantiates it "
@@ -367,25 +379,44 @@ def write_report(results: list[str | os.PathLike[str]], directory: str | os.Path
             "|---|---|---|---|---|---|---|---|---|",
         ]
         for g in games:
-            lines.append(
+            head.append(
                 f"| {g['method']} | {g['games']} | {100 * g['capture']:.1f} % | "
                 f"{100 * g['collision']:.1f} % | {100 * g['escaped']:.1f} % | "
                 f"{g['survival_mean']:.1f} | {g['survival_median']:.1f} | "
                 f"{100 * g['contact_games']:.1f} % | {g['contacts_per_100']:.2f} |"
             )
-        lines += ["", "Runs:", *games_info, ""]
+        summaries_md["Experiment 2"] = "\n".join(head)
+        lines += [*head, "", "Runs:", *games_info, ""]
         if fig5 is not None:
             lines.append(f"![{fig5.stem}]({fig5.name})")
-    for part in lifelong:
-        lines += ["", part.read_text(encoding="utf-8")]
+    for i, part in enumerate(lifelong):
+        text = part.read_text(encoding="utf-8")
+        summaries_md["Experiment 3" if i == 0 else f"Experiment 3 ({i + 1})"] = text.split(
+            "\n\nGoals:"
+        )[0]
+        lines += ["", text]
     report = out / "report.md"
     write_text(report, "\n".join(lines) + "\n")
-    return report
+    return Report(report, summaries_md)
+
+
+@dataclass(frozen=True)
+class Report:
+    """A written report: its file, and each experiment's summary (its table) as Markdown."""
+
+    path: Path
+    summaries: dict[str, str]
+
+    def __fspath__(self) -> str:
+        return str(self.path)
+
+    def __str__(self) -> str:
+        return str(self.path)
 
 
 def _experiment1_lines(
     summaries: list[dict[str, Any]], runs_info: list[str], figures: list[Path]
-) -> list[str]:
+) -> tuple[list[str], list[str]]:
     lines = [
         "# Experiment 1 — reaching goals in dynamic worlds",
         "",
@@ -403,7 +434,7 @@ def _experiment1_lines(
     flagged = [w for s in summaries for w in warnings_for(str(s.get("method")), s)]
     if flagged:
         lines += ["", *[f"**Warning**: {w}." for w in flagged]]
-    lines += ["", "Runs:", *runs_info, ""]
-    lines += [f"![{f.stem}]({f.name})" for f in figures]
-    lines.append("")
-    return lines
+    rest = ["", "Runs:", *runs_info, ""]
+    rest += [f"![{f.stem}]({f.name})" for f in figures]
+    rest.append("")
+    return lines, rest

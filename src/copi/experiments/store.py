@@ -16,7 +16,7 @@ import os
 import platform
 import sqlite3
 import time
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import asdict
 from pathlib import Path
@@ -24,6 +24,7 @@ from typing import Any
 from urllib.parse import quote
 
 from copi.errors import ResultsError
+from copi.experiments.rows import EpisodeRow, GameRecord, LifeRow, RunRow, build
 
 __all__ = ["ResultsError", "ResultsStore"]
 
@@ -63,6 +64,7 @@ CREATE TABLE IF NOT EXISTS episodes (
     min_clearance REAL,
     smoothness REAL,
     reason TEXT,
+    strategy TEXT,
     PRIMARY KEY (run_id, method, episode)
 );
 CREATE TABLE IF NOT EXISTS games (
@@ -103,6 +105,7 @@ CREATE TABLE IF NOT EXISTS lifelong (
     unfamiliar REAL,
     grown INTEGER,
     options INTEGER,
+    strategy TEXT,
     PRIMARY KEY (run_id, method, life, task)
 );
 CREATE TABLE IF NOT EXISTS trajectories (
@@ -122,20 +125,21 @@ GAME_COLUMNS = [
 LIFELONG_COLUMNS = [
     "world", "life", "task", "seed", "family", "sensing", "outcome", "success", "steps",
     "path_length", "optimal_length", "excess", "decision_us", "unfamiliar", "grown", "options",
+    "strategy",
 ]  # fmt: skip
 
 EPISODE_COLUMNS = [
     "episode", "world", "seed", "success", "reached", "collided", "timed_out", "steps",
     "contacts", "path_length", "optimal_length", "excess", "decision_us", "strategy_us",
     "unfamiliar", "no_policy", "family", "sensing", "outcome", "time_to_goal",
-    "min_clearance", "smoothness", "reason",
+    "min_clearance", "smoothness", "reason", "strategy",
 ]  # fmt: skip
 
 # Columns added after the first format, with their SQL types: older stores gain them
 # (NULL in their old rows) when opened for writing.
 _ADDED_EPISODE_COLUMNS = {
     "family": "TEXT", "sensing": "TEXT", "outcome": "TEXT", "time_to_goal": "REAL",
-    "min_clearance": "REAL", "smoothness": "REAL", "reason": "TEXT",
+    "min_clearance": "REAL", "smoothness": "REAL", "reason": "TEXT", "strategy": "TEXT",
 }  # fmt: skip
 
 
@@ -292,6 +296,8 @@ class ResultsStore:
                 self.db.execute(f"ALTER TABLE episodes ADD COLUMN {column} {kind}")
         if "outcome" not in {r[1] for r in self.db.execute("PRAGMA table_info(games)")}:
             self.db.execute("ALTER TABLE games ADD COLUMN outcome TEXT")
+        if "strategy" not in {r[1] for r in self.db.execute("PRAGMA table_info(lifelong)")}:
+            self.db.execute("ALTER TABLE lifelong ADD COLUMN strategy TEXT")
         self.db.execute(f"PRAGMA application_id = {APPLICATION_ID}")
         self.db.execute(f"PRAGMA user_version = {STORE_VERSION}")
 
@@ -342,7 +348,8 @@ class ResultsStore:
                 if rid == run_id:
                     return
                 other = json.loads(text)
-                if any(other.get(k) != config.get(k) for k in ("family", "sensing")):
+                # runs of the method on other worlds, levels or strategies are other runs
+                if any(other.get(k) != config.get(k) for k in _SERIES_KEYS):
                     continue
                 raise ResultsError(_difference(self.path, experiment, method, other, config))
             self.db.execute(
@@ -408,18 +415,34 @@ class ResultsStore:
             ).fetchone()
         return row is not None
 
-    def lifelong(self, run_id: str | None = None) -> list[dict[str, Any]]:
-        """Rows of Experiment 3 (none in a store written before it existed)."""
+    def lifelong(self, run_id: str | None = None) -> list[LifeRow]:
+        """Rows of Experiment 3 (none in a store written before it existed). Rows of an
+        older store, whose method labels carried the level and strategy
+        (``dwa+mapping``), read with them apart."""
         if not self._has_table("lifelong"):
             return []
+        from copi.experiments.methods import split_legacy_name
+
         cols = ["run_id", "experiment", "method", *LIFELONG_COLUMNS]
-        q = f"SELECT {', '.join(cols)} FROM lifelong"
+        out = []
+        for d in self._rows("lifelong", cols, run_id, "method, life, task"):
+            if d["strategy"] is None:
+                method, _, strategy = split_legacy_name(d["method"])
+                d["method"] = method
+                d["strategy"] = strategy or ("route" if d["sensing"] != "sensor" else "greedy")
+            out.append(build(LifeRow, d))
+        return out
+
+    def _rows(
+        self, table: str, cols: list[str], run_id: str | None, order: str
+    ) -> list[dict[str, Any]]:
+        q = f"SELECT {self._select(table, cols)} FROM {table}"
         args: tuple[Any, ...] = ()
         if run_id is not None:
             q += " WHERE run_id = ?"
             args = (run_id,)
         with self._errors():
-            rows = self.db.execute(q + " ORDER BY method, life, task", args).fetchall()
+            rows = self.db.execute(f"{q} ORDER BY {order}", args).fetchall()
         return [dict(zip(cols, r, strict=True)) for r in rows]
 
     def _insert(
@@ -453,14 +476,16 @@ class ResultsStore:
 
     # -- reading back -----------------------------------------------------------------
 
-    def runs(self) -> list[dict[str, Any]]:
+    def runs(self) -> list[RunRow]:
+        """Every run of the store, in the order they were registered."""
         with self._errors():
             cur = self.db.execute(
-                "SELECT run_id, experiment, method, config, versions, created FROM runs"
+                "SELECT run_id, experiment, method, config, versions, created FROM runs "
+                "ORDER BY rowid"
             ).fetchall()
         return [
-            {"run_id": r[0], "experiment": r[1], "method": r[2], "config": json.loads(r[3]),
-             "versions": json.loads(r[4]), "created": r[5]}
+            RunRow(run_id=r[0], experiment=r[1], method=r[2], config=json.loads(r[3]),
+                   versions=json.loads(r[4]), created=r[5])
             for r in cur
         ]  # fmt: skip
 
@@ -471,27 +496,32 @@ class ResultsStore:
             have = {r[1] for r in self.db.execute(f"PRAGMA table_info({table})")}
         return ", ".join(c if c in have else f"NULL AS {c}" for c in cols)
 
-    def episodes(self, run_id: str | None = None) -> list[dict[str, Any]]:
-        cols = ["run_id", "experiment", "method", *EPISODE_COLUMNS]
-        q = f"SELECT {self._select('episodes', cols)} FROM episodes"
-        args: Iterable[Any] = ()
-        if run_id is not None:
-            q += " WHERE run_id = ?"
-            args = (run_id,)
-        with self._errors():
-            rows = self.db.execute(q + " ORDER BY method, episode", tuple(args)).fetchall()
-        return [dict(zip(cols, r, strict=True)) for r in rows]
+    def episodes(self, run_id: str | None = None) -> list[EpisodeRow]:
+        """Episodes of one run (or of all), by method and episode. Rows of an older
+        store without the strategy column read with the strategy its run used."""
+        from copi.experiments.methods import split_legacy_name
 
-    def games(self, run_id: str | None = None) -> list[dict[str, Any]]:
+        cols = ["run_id", "experiment", "method", *EPISODE_COLUMNS]
+        rows = self._rows("episodes", cols, run_id, "method, episode")
+        configs: dict[str, dict[str, Any]] | None = None
+        out = []
+        for d in rows:
+            if d["strategy"] is None:
+                if configs is None:
+                    configs = {r.run_id: r.config for r in self.runs()}
+                if d["sensing"] in ("map", "oracle"):
+                    d["strategy"] = "route"
+                else:
+                    cfg = configs.get(d["run_id"], {})
+                    d["strategy"] = cfg.get("strategy", cfg.get("sensor_strategy", "greedy"))
+            d["method"] = split_legacy_name(d["method"])[0]
+            out.append(build(EpisodeRow, d))
+        return out
+
+    def games(self, run_id: str | None = None) -> list[GameRecord]:
+        """Games of one run (or of all), by method and game."""
         cols = ["run_id", "experiment", "method", *GAME_COLUMNS]
-        q = f"SELECT {self._select('games', cols)} FROM games"
-        args: tuple[Any, ...] = ()
-        if run_id is not None:
-            q += " WHERE run_id = ?"
-            args = (run_id,)
-        with self._errors():
-            rows = self.db.execute(q + " ORDER BY method, game", args).fetchall()
-        return [dict(zip(cols, r, strict=True)) for r in rows]
+        return [build(GameRecord, d) for d in self._rows("games", cols, run_id, "method, game")]
 
     def trajectories(self, run_id: str, method: str) -> list[dict[str, Any]]:
         with self._errors():
@@ -502,6 +532,10 @@ class ResultsStore:
             ).fetchall()
         return [{"episode": r[0], **json.loads(r[1])} for r in cur]
 
+
+_SERIES_KEYS = ("family", "sensing", "strategy")
+"""Keys of a run's identity that make it another series of the same method (not a
+conflicting configuration of the same one)."""
 
 # Keys of a run's identity that stand for an input's content, in words.
 _INPUTS = {

@@ -16,11 +16,20 @@ import numpy as np
 from numpy.typing import NDArray
 
 from copi._files import atomic_path
+from copi.core import (
+    SENSING_LEVELS,
+    Agent,
+    Observation,
+    Sensing,
+    Task,
+    check_sensing,
+    check_strategy,
+)
 from copi.errors import InvalidArgumentError
-from copi.experiments._episode import EpisodeOutcome, run_agent
+from copi.experiments._episode import EpisodeOutcome, run_episode
 from copi.experiments.methods import make_agent, method_spec
 from copi.learning import Capabilities
-from copi.online import SENSING_LEVELS, Agent, CopiAgent, Observation, Task, check_sensing
+from copi.online import CopiAgent
 from copi.world import Simulator, rasterize
 
 __all__ = ["Step", "WatchedEpisode", "save_watch", "watch_episode"]
@@ -67,7 +76,7 @@ class WatchedEpisode:
         return len(self.sim.path)
 
 
-class _Explaining:
+class _Explaining(Agent):
     """Wraps an agent, keeping each step's decision (copi's through ``explain=True``)."""
 
     def __init__(self, agent: Agent) -> None:
@@ -115,8 +124,11 @@ class _Explaining:
         self.steps.append(Step(obs.ranges.copy(), np.array(action, dtype=float), text, cands))
         return action
 
+    def finish(self, outcome: str) -> None:
+        self.agent.finish(outcome)
+
     def counters(self) -> dict[str, Any]:
-        return self.agent.counters() if hasattr(self.agent, "counters") else {}
+        return self.agent.counters()
 
 
 def _heading(v: Any) -> str:
@@ -132,9 +144,11 @@ def watch_episode(
     world_file: str | os.PathLike[str] | None = None,
     episode: int = 0,
     seed: int = 0,
-    sensing: str | None = None,
+    sensing: Sensing | None = None,
     max_steps: int = 1000,
     agent_radius: float = 0.3,
+    strategy: str = "greedy",
+    params: dict[str, Any] | None = None,
 ) -> WatchedEpisode:
     """Run episode ``episode`` of seed ``seed`` (the same task ``copi evaluate`` runs as
     that episode) with ``method``, recording every step.
@@ -149,6 +163,10 @@ def watch_episode(
         Where the episode is drawn (a file's world ``episode mod n``).
     sensing : str, optional
         Default: ``map``, or the least level the method needs when that is higher.
+    strategy : str
+        The global strategy at level ``sensor`` (greedy, mapping, causal).
+    params : dict, optional
+        Parameters over the method's registered ones (e.g. a guard).
     """
     from copi.experiments.navigation import draw_episode
 
@@ -162,13 +180,14 @@ def watch_episode(
     n_rays, max_range = 32, 10.0
     if spec.capabilities is not None and capabilities is not None:
         n_rays, max_range = capabilities.n_rays, float(capabilities.params.get("max_range", 10.0))
-    agent = _Explaining(make_agent(method, capabilities))
+    check_strategy(strategy)
+    agent = _Explaining(make_agent(method, capabilities, **(params or {})))
     sim = draw_episode(
         family, episode, seed,
         world_file=None if world_file is None else str(world_file),
         agent_radius=agent_radius, n_rays=n_rays, max_range=max_range, record=True,
     )  # fmt: skip
-    out = run_agent(agent, sim, sensing=sensing, max_steps=max_steps)
+    out = run_episode(agent, sim, sensing=sensing, max_steps=max_steps, strategy=strategy)
     return WatchedEpisode(sim, method, sensing, episode, seed, agent.steps, out)
 
 

@@ -1,20 +1,10 @@
-"""Online policy instantiation (paper §III): the context chain, global strategies (the
-causal map of one world among them), and the protocol every navigating method answers
-(:class:`Agent`, at a sensing level)."""
+"""Online policy instantiation (paper §III): the context chain, copi's agents, and the
+global strategies (the causal map of one world among them). The interface every method
+answers (``Agent``, ``Task``, ``Observation``, sensing levels) is :mod:`copi.core`."""
 
 from __future__ import annotations
 
-from copi.online._agent import (
-    SENSING_LEVELS,
-    SENSOR_STRATEGIES,
-    Agent,
-    CopiAgent,
-    Observation,
-    Steering,
-    Task,
-    check_sensing,
-    check_strategy,
-)
+from copi.online._agent import CopiAgent, Steering
 from copi.online._causal import CausalMap, CausalMapFormatError, CausalStrategy
 from copi.online._controller import ContextController, Decision
 from copi.online._learnt import LearntAgent
@@ -22,7 +12,6 @@ from copi.online._mapping import Mapping
 from copi.online._strategies import GlobalStrategy, Greedy, Route, make_strategy
 
 __all__ = [
-    "Agent",
     "CausalMap",
     "CausalMapFormatError",
     "CausalStrategy",
@@ -33,13 +22,7 @@ __all__ = [
     "Greedy",
     "LearntAgent",
     "Mapping",
-    "Observation",
     "Route",
-    "SENSING_LEVELS",
-    "SENSOR_STRATEGIES",
     "Steering",
-    "Task",
-    "check_sensing",
-    "check_strategy",
     "make_strategy",
 ]

@@ -1,151 +1,23 @@
-"""What an agent is told, and the one protocol every navigating method answers.
-
-The benchmark compares copi with methods that know more or less than it does, so what a
-method knows is explicit. Each episode runs at one *sensing level*, and the runner hands
-the method only what that level contains:
-
-========  ==========================================================================
-level     what the method receives
-========  ==========================================================================
-sensor    the ring of ranges and the goal's position relative to the agent
-map       plus the static world (and so the agent's position in it, the static route,
-          and the reading the static map alone would give, which tells walls apart
-          from moving obstacles)
-oracle    plus every moving obstacle's position, radius and velocity
-========  ==========================================================================
-
-A method declares the least level it needs (:attr:`Agent.sensing`); asking it to run
-below that is an error, and at a higher level it is still handed that level's
-information (it may ignore part of it, as a method of level ``sensor`` does at ``map``).
-"""
+"""The global half every method at one level shares (:class:`Steering`), and copi's
+online chain as an :class:`~copi.core.Agent` (:class:`CopiAgent`)."""
 
 from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from copi.core import Agent, Observation, Task, check_strategy
 from copi.errors import InvalidArgumentError
 from copi.learning import Capabilities
 from copi.online._controller import ContextController, Decision
 from copi.online._mapping import Mapping
 from copi.online._strategies import Route
-from copi.world import World
 
-__all__ = [
-    "SENSING_LEVELS",
-    "SENSOR_STRATEGIES",
-    "Agent",
-    "CopiAgent",
-    "Observation",
-    "Steering",
-    "Task",
-    "check_sensing",
-    "check_strategy",
-]
-
-SENSING_LEVELS = ("sensor", "map", "oracle")
-"""The sensing levels, from least to most informed."""
-
-
-SENSOR_STRATEGIES = ("greedy", "mapping", "causal")
-"""Global strategies at level ``sensor`` (levels with a map follow the static route):
-head for the goal, map as it goes (:class:`Mapping`), or map and learn a causal map of
-the world from experience (:class:`~copi.online.CausalStrategy`, lifelong runs)."""
-
-
-def check_strategy(name: str) -> str:
-    """``name`` if it is a sensor-level strategy; otherwise one clear error."""
-    if name not in SENSOR_STRATEGIES:
-        raise InvalidArgumentError(
-            f"sensor strategy must be one of {', '.join(SENSOR_STRATEGIES)}; got {name!r}"
-        )
-    return name
-
-
-def check_sensing(level: str, needs: str | None = None, *, method: str = "method") -> int:
-    """The rank of ``level`` (0, 1, 2); refuses an unknown level, or one below ``needs``."""
-    if level not in SENSING_LEVELS:
-        raise InvalidArgumentError(
-            f"sensing level must be one of {', '.join(SENSING_LEVELS)}; got {level!r}"
-        )
-    rank = SENSING_LEVELS.index(level)
-    if needs is not None and rank < check_sensing(needs):
-        raise InvalidArgumentError(
-            f"{method} needs sensing level {needs!r} or above; asked to run at {level!r}"
-        )
-    return rank
-
-
-@dataclass(frozen=True)
-class Task:
-    """What an agent is told when an episode starts, restricted to its sensing level."""
-
-    sensing: str
-    """The level the episode runs at."""
-    agent_radius: float
-    """Radius of the agent's disc, agent steps."""
-    goal_tolerance: float
-    """The goal is reached when the agent's centre is this close to it."""
-    n_rays: int
-    """Rays of the range ring (ray i at angle 2 pi i / n_rays from +x)."""
-    max_range: float
-    """Readings are clipped to this range."""
-    world: World | None = None
-    """The static world (levels ``map`` and ``oracle``; None at ``sensor``)."""
-    start: NDArray[np.float64] | None = None
-    """The start in the world's frame (``map`` and ``oracle``)."""
-    goal: NDArray[np.float64] | None = None
-    """The goal in the world's frame (``map`` and ``oracle``)."""
-    strategy: str = "greedy"
-    """The global strategy at level ``sensor``: "greedy" (head for the goal),
-    "mapping" (map as it goes, :class:`Mapping`) or "causal" (map, and learn from
-    experience which moves work where, :class:`~copi.online.CausalStrategy`). Levels
-    with a map follow the route."""
-    lifelong: bool = False
-    """The agent lives on in this world: tasks follow one another, each observation's
-    ``odometry`` places it in one frame for its whole life, and a method may keep what
-    it learnt (a map, a causal map) from one task to the next (Experiment 3)."""
-
-
-@dataclass(frozen=True)
-class Observation:
-    """What an agent perceives at one step, restricted to its sensing level."""
-
-    ranges: NDArray[np.float64]
-    """The range reading, shape (n_rays,), agent steps (every level)."""
-    goal: NDArray[np.float64]
-    """The goal relative to the agent, shape (2,) (every level)."""
-    position: NDArray[np.float64] | None = None
-    """The agent's position in the world's frame (``map``, ``oracle``)."""
-    static: NDArray[np.float64] | None = None
-    """The reading the static world alone would give here (``map``, ``oracle``)."""
-    obstacles: NDArray[np.float64] | None = None
-    """Moving obstacles as rows (x, y, vx, vy, radius), velocities in steps per step,
-    measured over the last step (``oracle``)."""
-    odometry: NDArray[np.float64] | None = None
-    """The agent's position relative to where its life in this world began (lifelong
-    runs, every level; None otherwise): what its own motion tells it, not a map."""
-
-
-class Agent(Protocol):
-    """A navigating method: told the task, then asked for a velocity each step."""
-
-    name: str
-    """The method's name in results (e.g. ``copi-extended``, ``dwa``)."""
-    sensing: str
-    """The least sensing level the method needs."""
-
-    def reset(self, task: Task) -> None:
-        """Start an episode."""
-
-    def act(self, obs: Observation) -> NDArray[np.float64]:
-        """The velocity for this step, shape (2,), norm at most 1."""
-        ...
+__all__ = ["CopiAgent", "Steering"]
 
 
 class Steering:
@@ -231,8 +103,8 @@ class Steering:
             self.causal.finish(outcome)
 
 
-class CopiAgent:
-    """copi's online chain (:class:`ContextController`) as an :class:`Agent`.
+class CopiAgent(Agent):
+    """copi's online chain (:class:`ContextController`) as an :class:`~copi.core.Agent`.
 
     The context chain picks among the template's policies; :class:`Steering` gives the
     global direction. With a guard, the static reading (level ``map`` and above) tells

@@ -8,11 +8,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from copi.core import Agent, Observation, Task
 from copi.errors import InvalidArgumentError
 from copi.learning import Capabilities
 from copi.learning._safety import SafetyModel, template_directions
 from copi.online import _kernels
-from copi.online._agent import Observation, Steering, Task
+from copi.online._agent import Steering
 from copi.online._controller import ContextController, screen_distances
 
 __all__ = ["LearntAgent", "node_priors"]
@@ -27,7 +28,7 @@ def node_priors(caps: Capabilities, model: SafetyModel) -> NDArray[np.float64]:
     return np.ascontiguousarray(model.template_safe[caps.node_template[:, None], idx])
 
 
-class LearntAgent:
+class LearntAgent(Agent):
     """copi's ``learnt`` preset as an :class:`~copi.online.Agent` (paper §II-D, §III).
 
     Each step the reading is recognised (nearest context-map node, its template and
@@ -69,9 +70,9 @@ class LearntAgent:
         *,
         name: str = "copi-learnt",
         guard: float = 1.05,
-        alpha: float = 1.0,
+        alpha: float = 2.0,
         beta: float = 0.0,
-        wait: bool = True,
+        wait: bool = False,
         continual: bool = False,
         grow_every: int = 20,
         persist: float = 0.0,

@@ -14,10 +14,15 @@ from copi.world._env import NavigationEnv
 from copi.world._families import (
     CROWD_OBSTACLES,
     FAMILIES,
+    FamilySpec,
     check_family,
     family_inputs,
+    family_names,
+    family_spec,
     in_sight,
+    register_family,
     sample_world,
+    unregister_family,
 )
 from copi.world._family_indoor import IndoorParams, indoor_world
 from copi.world._family_maps import (
@@ -45,6 +50,7 @@ from copi.world._world import ObstacleSpec, World
 __all__ = [
     "CROWD_OBSTACLES",
     "FAMILIES",
+    "FamilySpec",
     "IndoorParams",
     "MOVINGAI_ENV",
     "MapsParams",
@@ -63,6 +69,8 @@ __all__ = [
     "draw_simulator",
     "draw_world",
     "family_inputs",
+    "family_names",
+    "family_spec",
     "in_sight",
     "indoor_world",
     "is_star_shaped",
@@ -74,8 +82,10 @@ __all__ = [
     "polygon_world",
     "random_world",
     "rasterize",
+    "register_family",
     "render_rgb",
     "sample_start_goal",
     "sample_world",
     "save_worlds",
+    "unregister_family",
 ]

@@ -2,9 +2,14 @@
 
 from __future__ import annotations
 
+import importlib.metadata
 import os
+import re
+from collections.abc import Callable
+from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
 import shapely
 from shapely.geometry import LineString
 
@@ -19,24 +24,144 @@ from copi.world._world import ObstacleSpec, World
 
 __all__ = [
     "CROWD_OBSTACLES",
+    "ENTRY_POINTS",
     "FAMILIES",
+    "FamilySpec",
     "check_family",
     "family_inputs",
+    "family_names",
+    "family_spec",
     "in_sight",
+    "register_family",
     "sample_world",
+    "unregister_family",
 ]
 
+_NAME = re.compile(r"^[a-z0-9][a-z0-9_.-]*$")
+
 FAMILIES = ("crowd", "indoor", "maps", "polygon", "star")
-"""Names of the world families, sorted (see :func:`sample_world`)."""
+"""Names of copi's own world families, sorted (see :func:`sample_world`); other packages
+add theirs with :func:`register_family` (all of them: :func:`family_names`)."""
 
 CROWD_OBSTACLES = ObstacleSpec(count=(25, 40), radius=(0.5, 1.0), speed=0.8)
 """Moving obstacles of the ``crowd`` family: denser and faster than the paper's."""
 
+ENTRY_POINTS = "copi.families"
+"""Entry-point group of third-party world families: each entry point names a callable
+taking no argument that registers families (:func:`register_family`) when called."""
+
+Sampler = Callable[..., World]
+"""sampler(rng, *, name=None) -> World: a family's world drawn from the generator."""
+
+
+@dataclass(frozen=True)
+class FamilySpec:
+    """A registered world family."""
+
+    name: str
+    sampler: Sampler
+    summary: str = ""
+    inputs: Callable[[], dict[str, str]] | None = field(default=None, compare=False)
+    """The content hashes of the data the family draws from, by name (None: the seed
+    only): part of every run's identity, so that worlds drawn from other data never
+    resume into a run."""
+
+
+_FAMILIES: dict[str, FamilySpec] = {}
+_plugins = "no"
+
+
+def register_family(
+    name: str,
+    sampler: Sampler,
+    *,
+    summary: str = "",
+    inputs: Callable[[], dict[str, str]] | None = None,
+    replace: bool = False,
+) -> FamilySpec:
+    """Register world family ``name``: ``sampler(rng, *, name=None)`` draws a
+    :class:`World` from a numpy Generator (every random choice from it), which
+    :func:`sample_world` then returns. Episodes of the family draw their task, start and
+    obstacles after the world, from the same generator.
+
+    Examples
+    --------
+    >>> def square(rng, *, name=None):
+    ...     side = float(rng.uniform(20, 30))
+    ...     return World([[0, 0], [side, 0], [side, side], [0, side]], name=name or "square")
+    >>> _ = register_family("doc-square", square, summary="an empty square", replace=True)
+    >>> sample_world("doc-square", 0).name, "doc-square" in family_names()
+    ('square', True)
+    >>> unregister_family("doc-square")
+    """
+    if not isinstance(name, str) or not _NAME.match(name):
+        raise InvalidArgumentError(
+            f"a family's name must be lower-case letters, digits, '-', '_' or '.'; got {name!r}"
+        )
+    if not callable(sampler):
+        raise InvalidArgumentError(f"the sampler of {name} must be callable; got {sampler!r}")
+    spec = FamilySpec(name, sampler, summary, inputs)
+    old = _FAMILIES.get(name)
+    if old is not None and not replace:
+        if old.sampler is sampler:
+            return old
+        raise InvalidArgumentError(
+            f"a family named {name!r} is registered already; pass replace=True to register "
+            "over it"
+        )
+    _FAMILIES[name] = spec
+    return spec
+
+
+def unregister_family(name: str) -> None:
+    """Remove a registered family (e.g. one a test registered); copi's own stay."""
+    if name in FAMILIES:
+        raise InvalidArgumentError(f"{name} is one of copi's own families; it stays registered")
+    _FAMILIES.pop(name, None)
+
+
+def _load_plugins() -> None:
+    global _plugins
+    if _plugins != "no":
+        return
+    _plugins = "loading"
+    try:
+        for ep in importlib.metadata.entry_points(group=ENTRY_POINTS):
+            try:
+                hook = ep.load()
+                if callable(hook):
+                    hook()
+            except Exception as exc:
+                raise InvalidArgumentError(
+                    f"entry point {ep.name!r} ({ep.value}) of {ENTRY_POINTS} cannot be loaded "
+                    f"({type(exc).__name__}: {exc})"
+                ) from None
+    finally:
+        _plugins = "yes"
+
+
+def family_names() -> tuple[str, ...]:
+    """Every registered family: copi's own (sorted), then those of other packages."""
+    _load_plugins()
+    return tuple(_FAMILIES)
+
+
+def family_spec(family: str) -> FamilySpec:
+    """A registered family by name; an unknown name is refused, listing the known ones."""
+    spec = _FAMILIES.get(family)
+    if spec is None:
+        _load_plugins()
+        spec = _FAMILIES.get(family)
+    if spec is None:
+        raise InvalidArgumentError(
+            f"family must be one of {', '.join(family_names())}; got {family!r}"
+        )
+    return spec
+
 
 def check_family(family: str) -> str:
-    """``family`` if it names a family; otherwise one clear error listing them."""
-    if family not in FAMILIES:
-        raise InvalidArgumentError(f"family must be one of {', '.join(FAMILIES)}; got {family!r}")
+    """``family`` if it names a registered family; otherwise one clear error listing them."""
+    family_spec(family)
     return family
 
 
@@ -51,8 +176,8 @@ def family_inputs(family: str) -> dict[str, str]:
     >>> family_inputs("star"), sorted(family_inputs("maps"))
     ({}, ['maps_sha'])
     """
-    check_family(family)
-    return {"maps_sha": maps_identity()} if family == "maps" else {}
+    spec = family_spec(family)
+    return {} if spec.inputs is None else dict(spec.inputs())
 
 
 def sample_world(
@@ -82,14 +207,15 @@ def sample_world(
         The ``polygon`` world of the same seed with 25 to 40 obstacles moving at 0.8
         (:data:`CROWD_OBSTACLES`).
 
-    World k of a family for seed s is ``sample_world(family, default_rng([s, k]))``, as
-    episodes elsewhere in copi; passing the same generator on to
-    :meth:`Simulator.from_world` then draws the task.
+    and any family registered with :func:`register_family`. World k of a family for
+    seed s is ``sample_world(family, default_rng([s, k]))``, as episodes elsewhere in
+    copi; passing the same generator on to :meth:`Simulator.from_world` then draws the
+    task.
 
     Parameters
     ----------
     family : str
-        One of :data:`FAMILIES`.
+        A registered family (:func:`family_names`).
     seed : int or Generator, optional
     name : str, optional
         The world's name; by default the family and a short description.
@@ -99,7 +225,7 @@ def sample_world(
     Raises
     ------
     InvalidArgumentError
-        For an unknown family, or for ``maps`` when no map directory is found.
+        For an unknown family, or for ``maps`` when the map directory holds no map.
 
     Examples
     --------
@@ -110,23 +236,45 @@ def sample_world(
     >>> try:
     ...     sample_world("castle")
     ... except InvalidArgumentError as err:
-    ...     print(err)
-    family must be one of crowd, indoor, maps, polygon, star; got 'castle'
+    ...     print(err)  # doctest: +ELLIPSIS
+    family must be one of crowd, indoor, maps, polygon, star...; got 'castle'
     """
-    check_family(family)
+    spec = family_spec(family)
     rng = as_generator(seed)
-    if family == "star":
-        w = random_world(rng)
-        return w.replace(name=name or f"star-{len(w.boundary)}gon")
-    if family == "polygon":
-        return polygon_world(rng, name=name)
-    if family == "crowd":
-        w = polygon_world(rng)
-        return w.replace(name=name or "crowd" + w.name[len("polygon") :], obstacles=CROWD_OBSTACLES)
-    if family == "indoor":
-        return indoor_world(rng, name=name)
-    params = MapsParams(data_dir=None if data_dir is None else os.fspath(data_dir))
-    return map_window_world(rng, params=params, name=name)
+    if family == "maps" and data_dir is not None:
+        params = MapsParams(data_dir=os.fspath(data_dir))
+        return map_window_world(rng, params=params, name=name)
+    world = spec.sampler(rng, name=name)
+    if not isinstance(world, World):
+        raise InvalidArgumentError(
+            f"the sampler of family {family!r} returned a {type(world).__name__}, not a World"
+        )
+    return world
+
+
+def _star(rng: np.random.Generator, *, name: str | None = None) -> World:
+    w = random_world(rng)
+    return w.replace(name=name or f"star-{len(w.boundary)}gon")
+
+
+def _crowd(rng: np.random.Generator, *, name: str | None = None) -> World:
+    w = polygon_world(rng)
+    return w.replace(name=name or "crowd" + w.name[len("polygon") :], obstacles=CROWD_OBSTACLES)
+
+
+def _maps(rng: np.random.Generator, *, name: str | None = None) -> World:
+    return map_window_world(rng, name=name)
+
+
+for _name, _sampler, _summary, _inputs in (
+    ("crowd", _crowd, "the polygon worlds with 25-40 obstacles moving at 0.8", None),
+    ("indoor", indoor_world, "rooms, doors and corridors on a random floor plan", None),
+    ("maps", _maps, "windows of Moving AI grid maps, scaled for disc agents",
+     lambda: {"maps_sha": maps_identity()}),
+    ("polygon", polygon_world, "random simple polygons, not star-shaped, with holes", None),
+    ("star", _star, "the paper's random star-shaped polygons of 4 to 12 sides", None),
+):  # fmt: skip
+    register_family(_name, _sampler, summary=_summary, inputs=_inputs)
 
 
 def in_sight(world: World, a: Any, b: Any, *, radius: float = 0.0) -> bool:

@@ -9,6 +9,10 @@ import pytest
 
 from copi.learning import LearnParams, learn
 
+# tests/plugin holds a package standing for a user's (loaded through its entry points by
+# the tests that put it on the path): never collected, never imported on its own
+collect_ignore = ["plugin"]
+
 
 @pytest.fixture(scope="session")
 def learnt_caps(tmp_path_factory: pytest.TempPathFactory) -> Path:

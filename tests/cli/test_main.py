@@ -292,7 +292,7 @@ def test_presets_set_a_mode_whole(tmp_path: Path, capsys: pytest.CaptureFixture[
 def test_reproduce_into_a_directory_of_another_run_says_what_to_do(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch
 ) -> None:
-    import copi.experiments.reproduce as commands
+    import copi.experiments._reproduce as commands
     from copi.experiments.store import ResultsStore
 
     def clash(output: Path, quick: bool, workers: int, seed: int, tasks: object) -> None:

@@ -245,7 +245,7 @@ def test_a_life_resumes_from_saved_maps_and_bad_maps_are_refused(
     (other / saved.name).write_bytes(saved.read_bytes()[:200])
     code, _, err = run([*base, "-o", str(tmp_path / "c.sqlite"), "--from-maps", str(other)],
                        capsys)  # fmt: skip
-    assert code == 2 and "not a complete causal map file" in err and "Traceback" not in err
+    assert code == 2 and "not a complete .npz archive" in err and "Traceback" not in err
     assert not (tmp_path / "c.sqlite").exists()
 
 

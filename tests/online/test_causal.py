@@ -178,7 +178,7 @@ def test_bad_files_are_refused_saying_what_differs(tmp_path: Path) -> None:
         CausalMap.load(path, capabilities="c2")
     cut = tmp_path / "cut.npz"
     cut.write_bytes(path.read_bytes()[:300])
-    with pytest.raises(CausalMapFormatError, match="not a complete causal map file"):
+    with pytest.raises(CausalMapFormatError, match="cut.npz: not a complete .npz archive"):
         CausalMap.load(cut)
     foreign = tmp_path / "foreign.npz"
     np.savez(foreign, x=np.zeros(3))
@@ -198,7 +198,19 @@ def test_bad_files_are_refused_saying_what_differs(tmp_path: Path) -> None:
     arrays["outcome_keys"][0, 2] = 1
     arrays["steps"] = -arrays["steps"]
     np.savez(bad, **arrays)
-    with pytest.raises(CausalMapFormatError, match="array 'steps' holds counts that are not >= 0"):
+    with pytest.raises(CausalMapFormatError, match=r"array 'steps' holds counts that are not in 0 \.\."):
+        CausalMap.load(bad)
+    # values beyond what a life can record, and an unknown member of any size, unread
+    for name, value in (("n", 1e308), ("contacts", 1e12)):
+        tampered = {**arrays, "steps": np.abs(arrays["steps"])}
+        tampered[name] = np.full_like(arrays[name], value)
+        np.savez(bad, **tampered)
+        with pytest.raises(CausalMapFormatError, match=f"array '{name}' holds counts that are not"):
+            CausalMap.load(bad)
+    ok = {**arrays, "steps": np.abs(arrays["steps"])}
+    ok["contacts"] = ok["n"] + 1
+    np.savez(bad, **ok)
+    with pytest.raises(CausalMapFormatError, match="more contacts than options executed"):
         CausalMap.load(bad)
     with zipfile.ZipFile(bad) as zf:  # still an archive with the metadata: only checks failed
         assert "metadata.npy" in zf.namelist()
@@ -210,8 +222,12 @@ def test_bad_records_and_parameters() -> None:
         cmap.record(0, 0, E, None, 1, False)
     with pytest.raises(InvalidArgumentError, match="no place 99 / option 0 on this map"):
         cmap.record(99, 0, E, 1, 1, False)
-    with pytest.raises(InvalidArgumentError, match="patience must be a positive int"):
-        CausalMap(patience=0)
+    for bad in (0, 1e30, 2.5, True):
+        with pytest.raises(InvalidArgumentError, match=r"patience must be an int in 1 \.\. 1000"):
+            CausalMap(patience=bad)
+    for key in ("contact_cost", "prior", "context_prior", "extent"):
+        with pytest.raises(InvalidArgumentError, match=f"{key} must be a number in"):
+            CausalMap(**{key: 1e308})
     with pytest.raises(InvalidArgumentError, match="a place .* must be a whole number of grid cells"):
         CausalStrategy(CausalMap(place=1.3))
 
@@ -276,7 +292,10 @@ def test_files_with_impossible_parameters_or_grids_are_refused(tmp_path: Path) -
         return bad
 
     for params, message in [
-        ({"extent": 1e12, "place": 1e-3}, "places a side; at most 2048"),
+        ({"extent": 1e4, "place": 1e-3}, "places a side; at most 2048"),
+        ({"extent": 1e12}, r"extent must be a number in \(0, 10000\]"),
+        ({"contact_cost": 1e308}, "contact_cost must be a number in"),
+        ({"patience": 1e30}, "patience must be an int in 1 .. 1000"),
         ({"patience": "abc"}, "bad parameters"),
         ({"patience": float("inf")}, "bad parameters"),
     ]:

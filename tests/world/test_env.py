@@ -128,8 +128,14 @@ def test_one_fixed_world_and_bad_world_arguments() -> None:
         NavigationEnv(world=U_TRAP, world_file="w.json")
     with pytest.raises(InvalidArgumentError, match="must be a World or its dict; got int"):
         NavigationEnv(world=[U_TRAP, 3])
-    with pytest.raises(InvalidArgumentError, match="width must be a positive int"):
-        NavigationEnv(width=0)
+    for size in (0, 10**6, 2.5, True):
+        with pytest.raises(InvalidArgumentError, match=r"width must be an int in 1 \.\. 4096 pixels"):
+            NavigationEnv(width=size)
+    env = NavigationEnv(world=U_TRAP)
+    env.reset(seed=0)
+    for bad in ([1.0, 0.0, 3.0], [np.nan, 0.0], "east", [[1.0, 0.0]]):
+        with pytest.raises(InvalidArgumentError, match="action must be"):
+            env.step(bad)
 
 
 def test_rgb_array_is_fast_and_sized() -> None:

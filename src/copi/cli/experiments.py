@@ -413,7 +413,7 @@ def reproduce_command(
     Experiment 1 on 1549 dynamic worlds in the faithful mode (the paper's chain) and the
     extended mode, Experiment 2 (homicidal-chauffeur games), the benchmark's quick
     version, Experiment 3 (lifelong), and the reports."""
-    from copi.experiments.reproduce import reproduce
+    from copi.experiments._reproduce import reproduce
 
     check_outputs(
         {"the directory": (output, "directory"),

@@ -51,10 +51,20 @@ def _ctrl_c_inside(exc: BaseException) -> KeyboardInterrupt | None:
     return None
 
 
+_NAMED = ("evaluate", "benchmark", "watch", "lifelong", "learn", "pursuit")
+"""Commands whose --help ends with the registered methods, families and presets."""
+
+
 def _run(argv: list[str] | None) -> None:
     """Parse and invoke without click's own handlers, so that every error comes here."""
     command = typer.main.get_command(app)
     args = sys.argv[1:] if argv is None else list(argv)
+    if ("--help" in args or "-h" in args) and args and args[0] in _NAMED:
+        # the registry imports every method: only when help is asked for
+        from copi.cli._common import names_epilog
+
+        sub = command.commands[args[0]]  # type: ignore[attr-defined]
+        sub.epilog = names_epilog()
     with command.make_context("copi", args) as ctx:
         command.invoke(ctx)
 

@@ -16,7 +16,14 @@ from copi.errors import CopiError, InvalidArgumentError
 from copi.planning import length_error_bound, shortest_path
 from copi.world import Simulator
 
-__all__ = ["EpisodeOutcome", "make_task", "optimal_to_goal", "run_episode"]
+__all__ = [
+    "EnvEpisode",
+    "EpisodeOutcome",
+    "make_task",
+    "optimal_to_goal",
+    "run_episode",
+    "run_in_env",
+]
 
 @dataclass(frozen=True)
 class EpisodeOutcome:
@@ -203,3 +210,68 @@ def run_episode(
         no_policy=no_policy,
         counters=counters,
     )
+
+
+@dataclass(frozen=True)
+class EnvEpisode:
+    """What an agent did in one episode of the Gymnasium environment."""
+
+    outcome: str
+    """"success" (the goal reached), "collision" (a contact ended it), "timeout" (the
+    environment truncated it)."""
+    steps: int
+    reward: float
+    """The environment's return (sum of rewards)."""
+    info: dict[str, Any]
+    """The last step's info."""
+
+
+def run_in_env(
+    agent: Agent,
+    env: Any,
+    *,
+    seed: int | None = None,
+    options: dict[str, Any] | None = None,
+) -> EnvEpisode:
+    """Run a copi :class:`~copi.core.Agent` for one episode of ``copi/Navigation-v0`` (or
+    any environment wrapping :class:`~copi.world.NavigationEnv`): the agent is told the
+    environment's task (level ``sensor``: its radius, goal tolerance and sensor) and acts
+    on its observations; every step goes through ``env.step`` (and so through its
+    wrappers, such as the time limit).
+
+    Examples
+    --------
+    >>> import gymnasium, copi
+    >>> from copi.baselines import CompassGuard
+    >>> env = gymnasium.make("copi/Navigation-v0")
+    >>> run_in_env(CompassGuard(), env, seed=0).outcome
+    'success'
+    """
+    if not isinstance(agent, Agent):
+        raise InvalidArgumentError(
+            f"{type(agent).__name__} is not a copi.core.Agent: subclass it (reset and act; "
+            "finish and counters are optional)"
+        )
+    base = env.unwrapped
+    if not hasattr(base, "task") or not hasattr(base, "observation"):
+        raise InvalidArgumentError(
+            f"{type(base).__name__} is not copi's navigation environment (it has no task() "
+            "and observation())"
+        )
+    env.reset(seed=seed, options=options)
+    agent.reset(base.task())
+    total, steps = 0.0, 0
+    info: dict[str, Any] = {}
+    outcome = "timeout"
+    while True:
+        action = np.asarray(agent.act(base.observation()), dtype=np.float32)
+        _, reward, terminated, truncated, info = env.step(action)
+        total += float(reward)
+        steps += 1
+        if terminated:
+            outcome = "success" if info.get("is_success") else "collision"
+            break
+        if truncated:
+            break
+    agent.finish(outcome)
+    return EnvEpisode(outcome, steps, total, info)

@@ -161,6 +161,30 @@ class RunIdentity:
     def run_id(self) -> str:
         return hashlib.sha256(json.dumps(self.identity(), sort_keys=True).encode()).hexdigest()[:16]
 
+    def run_into(
+        self,
+        output: str | os.PathLike[str],
+        *,
+        experiment: str,
+        method: str,
+        table: str,
+        total: int,
+        item: Callable[[Any, int], Any],
+        unit: str,
+        chunk: int,
+        workers: int = 1,
+        scheduler: str | None = None,
+        progress: Callable[[int, int], None] | None = None,
+    ) -> str:
+        """Run (or resume) this one-run experiment's items 0 .. total - 1
+        (``item(config, k)``, a module-level function) into ``output`` through
+        :func:`run_series`; returns the run id."""
+        run_id = self.run_id()
+        series = Series(run_id, experiment, method, self.identity(), table, total)
+        run_series(self, output, [series], work=_Single(item), unit=unit, workers=workers,
+                   scheduler=scheduler, progress=progress, chunk=chunk)  # fmt: skip
+        return run_id
+
 
 def execute(
     config: Any,
@@ -283,6 +307,16 @@ def run_series(
             commit=commit, workers=workers, scheduler=scheduler, chunk=chunk,
             stopping=stops_cleanly(tally, output, unit, saved),
         )  # fmt: skip
+
+
+class _Single:
+    """The work of a one-run experiment: item k of the config for its one series."""
+
+    def __init__(self, item: Callable[[Any, int], Any]) -> None:
+        self.item = item
+
+    def __call__(self, config: Any, group: Any, k: int, todo: list[Series]) -> list[Any]:
+        return [(s, self.item(config, k)) for s in todo]
 
 
 class _many:

@@ -35,6 +35,7 @@ from copi.experiments._runs import (
 )
 from copi.experiments.methods import (
     MethodRun,
+    as_arms,
     check_method_capabilities,
     make_agent,
     method_spec,
@@ -109,13 +110,8 @@ class BenchmarkConfig:
         if not self.methods:
             raise InvalidArgumentError("methods must name at least one method; got none")
         # arms may be given as text ("dwa@sensor:mapping"), as on the command line
-        arms: list[MethodRun] = []
+        object.__setattr__(self, "methods", as_arms(self.methods))
         for run in self.methods:
-            arms += parse_methods(run) if isinstance(run, str) else [run]
-        object.__setattr__(self, "methods", tuple(dict.fromkeys(arms)))
-        for run in self.methods:
-            if not isinstance(run, MethodRun):
-                raise InvalidArgumentError(f"methods must be MethodRun arms; got {run!r}")
             parse_methods(f"{run.method}@{run.sensing}"
                           + (f":{run.strategy}" if run.sensing == "sensor" else ""))
             preset = method_spec(run.method).capabilities

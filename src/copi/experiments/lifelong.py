@@ -47,7 +47,13 @@ from copi.experiments._runs import (
     run_series,
 )
 from copi.experiments.benchmark import benchmark_max_steps
-from copi.experiments.methods import MethodRun, make_agent, method_spec, parse_methods
+from copi.experiments.methods import (
+    MethodRun,
+    as_arms,
+    make_agent,
+    method_spec,
+    parse_methods,
+)
 from copi.experiments.navigation import _capabilities
 from copi.geometry._arrays import positive_int
 from copi.world import RangeSensor, Simulator, check_family, family_inputs, sample_world
@@ -112,7 +118,11 @@ class LifelongConfig:
     worlds: int = 20
     tasks: int = 50
     seed: int = 0
-    methods: tuple[MethodRun, ...] = parse_lifelong_methods(None)
+    methods: tuple[MethodRun, ...] = dataclasses.field(
+        default_factory=lambda: parse_lifelong_methods(None)
+    )
+    """The arms (text such as ``"dwa@sensor:mapping"`` is parsed); default: every arm of
+    :data:`LIFELONG_METHODS`."""
     agent_radius: float = 0.3
     capabilities_sha: str = ""
     maps: str | None = None
@@ -135,13 +145,7 @@ class LifelongConfig:
         if not self.methods:
             raise InvalidArgumentError("methods must name at least one method; got none")
         # arms may be given as text, as on the command line
-        arms: list[MethodRun] = []
-        for m in self.methods:
-            arms += list(parse_lifelong_methods(m)) if isinstance(m, str) else [m]
-        object.__setattr__(self, "methods", tuple(dict.fromkeys(arms)))
-        for m in self.methods:
-            if not isinstance(m, MethodRun):
-                raise InvalidArgumentError(f"methods must be MethodRun arms; got {m!r}")
+        object.__setattr__(self, "methods", as_arms(self.methods, parse_lifelong_methods))
         needs = [m for m in self.methods if method_spec(m.method).capabilities]
         if needs and self.capabilities is None:
             raise InvalidArgumentError(

@@ -31,15 +31,13 @@ three fields are stored apart in every result row.
 
 from __future__ import annotations
 
-import importlib.metadata
 import inspect
 import json
-import re
-import threading
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
+from copi._plugins import Registry
 from copi.baselines import (
     DWA,
     NAVGROUND_BEHAVIORS,
@@ -52,7 +50,7 @@ from copi.baselines import (
     navground_available,
 )
 from copi.core import SENSING_LEVELS, Agent, Sensing, check_sensing, check_strategy
-from copi.errors import CopiError, InvalidArgumentError
+from copi.errors import InvalidArgumentError
 from copi.learning import Capabilities
 from copi.online import CopiAgent, LearntAgent
 
@@ -62,7 +60,7 @@ __all__ = [
     "LEGACY_NAMES",
     "MethodRun",
     "MethodSpec",
-    "PluginError",
+    "as_arms",
     "check_method_capabilities",
     "default_methods",
     "make_agent",
@@ -81,15 +79,6 @@ argument that registers methods (``register_method``) when called. In ``pyprojec
     [project.entry-points."copi.methods"]
     mine = "my_package.copi_plugin:register"
 """
-
-_NAME = re.compile(r"^[a-z0-9][a-z0-9_.-]*$")
-"""A method's name: lower-case letters, digits, ``-``, ``_``, ``.`` (``@``, ``:``, ``+``
-and ``/`` belong to the command line's grammar, never to a name)."""
-
-
-class PluginError(CopiError):
-    """A third-party entry point cannot be loaded or registers something invalid."""
-
 
 @dataclass(frozen=True)
 class MethodSpec:
@@ -145,9 +134,7 @@ class MethodSpec:
         return agent
 
 
-_REGISTRY: dict[str, MethodSpec] = {}
-_LOCK = threading.Lock()
-_plugins: str = "no"  # "no", "loading", "yes"
+_REGISTRY: Registry[MethodSpec] = Registry("method", ENTRY_POINTS)
 
 
 def _json_default(v: Any) -> bool:
@@ -227,10 +214,6 @@ def register_method(
     ({'speed': 0.0}, ('sensor', 'map'), 'doc-still')
     >>> unregister_method("doc-still")
     """
-    if not isinstance(name, str) or not _NAME.match(name):
-        raise InvalidArgumentError(
-            f"a method's name must be lower-case letters, digits, '-', '_' or '.'; got {name!r}"
-        )
     if not callable(factory):
         raise InvalidArgumentError(f"the factory of {name} must be callable; got {factory!r}")
     check_sensing(sensing)
@@ -254,66 +237,25 @@ def register_method(
         available=available or (lambda: True), ablation=ablation, default=default,
         bound=bound,
     )  # fmt: skip
-    with _LOCK:
-        old = _REGISTRY.get(name)
-        if old is not None and not replace:
-            same = old.factory is factory and old.params == spec.params
-            if not same:
-                raise InvalidArgumentError(
-                    f"a method named {name!r} is registered already; pass replace=True to "
-                    "register over it"
-                )
-            return old
-        _REGISTRY[name] = spec
-    return spec
+    old = _REGISTRY.current(name)
+    same = old is not None and old.factory is factory and old.params == spec.params
+    return _REGISTRY.add(name, spec, same=same, replace=replace)
 
 
 def unregister_method(name: str) -> None:
     """Remove a registered method (e.g. one a test registered); copi's own stay."""
-    if name in _BUILTIN:
-        raise InvalidArgumentError(f"{name} is one of copi's own methods; it stays registered")
-    with _LOCK:
-        _REGISTRY.pop(name, None)
-
-
-def _load_plugins() -> None:
-    """Call every entry point of :data:`ENTRY_POINTS`, once per process."""
-    global _plugins
-    if _plugins != "no":
-        return
-    _plugins = "loading"
-    try:
-        for ep in importlib.metadata.entry_points(group=ENTRY_POINTS):
-            try:
-                hook = ep.load()
-                if callable(hook):
-                    hook()
-            except CopiError as exc:
-                raise PluginError(
-                    f"entry point {ep.name!r} ({ep.value}) of {ENTRY_POINTS}: {exc}"
-                ) from None
-            except Exception as exc:
-                raise PluginError(
-                    f"entry point {ep.name!r} ({ep.value}) of {ENTRY_POINTS} cannot be "
-                    f"loaded ({type(exc).__name__}: {exc})"
-                ) from None
-    finally:
-        _plugins = "yes"
+    _REGISTRY.remove(name)
 
 
 def method_names() -> tuple[str, ...]:
     """Every registered method's name, copi's modes first, then the baselines, peers and
     bounds, then those of other packages (in the order registered)."""
-    _load_plugins()
-    return tuple(_REGISTRY)
+    return _REGISTRY.names()
 
 
 def method_spec(name: str) -> MethodSpec:
     """The spec of a method by name; an unknown name is refused, listing the known ones."""
     spec = _REGISTRY.get(name)
-    if spec is None:
-        _load_plugins()
-        spec = _REGISTRY.get(name)
     if spec is None:
         legacy = LEGACY_NAMES.get(name)
         hint = f" (now {legacy!r})" if legacy else ""
@@ -337,7 +279,7 @@ def make_agent(name: str, capabilities: Capabilities | None = None, **params: An
 
 def default_methods() -> tuple[str, ...]:
     """What the benchmark runs unless told otherwise."""
-    return tuple(n for n in method_names() if _REGISTRY[n].default)
+    return tuple(n for n in method_names() if method_spec(n).default)
 
 
 # -- arms: a method at a level with a global strategy ---------------------------------
@@ -413,6 +355,23 @@ def parse_methods(
     order = {n: i for i, n in enumerate(method_names())}
     return sorted(out, key=lambda r: (order[r.method], SENSING_LEVELS.index(r.sensing),
                                       r.strategy))  # fmt: skip
+
+
+def as_arms(
+    items: Iterable[MethodRun | str],
+    parse: Callable[[str], Iterable[MethodRun]] | None = None,
+) -> tuple[MethodRun, ...]:
+    """Arms given as :class:`MethodRun` or as text (``"dwa@sensor:mapping"``, read by
+    ``parse``, default :func:`parse_methods`), once each, in order."""
+    read = parse or parse_methods
+    out: list[MethodRun] = []
+    for item in items:
+        runs = list(read(item)) if isinstance(item, str) else [item]
+        for run in runs:
+            if not isinstance(run, MethodRun):
+                raise InvalidArgumentError(f"methods must be MethodRun arms; got {run!r}")
+        out += runs
+    return tuple(dict.fromkeys(out))
 
 
 LEGACY_NAMES = {
@@ -532,4 +491,4 @@ def _register_builtins() -> None:
 
 
 _register_builtins()
-_BUILTIN = frozenset(_REGISTRY)
+_REGISTRY.seal()

@@ -20,11 +20,9 @@ from copi.experiments._episode import EpisodeOutcome, optimal_to_goal, run_episo
 from copi.experiments._runs import (
     MAX_EPISODES,
     RunIdentity,
-    Series,
     check_count,
     check_family_inputs,
     file_sha,
-    run_series,
 )
 from copi.experiments.methods import check_method_capabilities, make_agent, method_spec
 from copi.geometry._arrays import positive_int
@@ -374,7 +372,7 @@ def check_world_file(path: str | os.PathLike[str], *, agent_radius: float = 0.3)
 
 
 def evaluate_episodes(config: NavigationConfig, episodes: list[int]) -> list[EpisodeResult]:
-    """Several episodes in one task (fewer round trips to the workers)."""
+    """Several episodes of a run (in order)."""
     return [evaluate_episode(config, k) for k in episodes]
 
 
@@ -400,15 +398,8 @@ def evaluate(
         )  # fmt: skip
     if config.world_file is not None:
         check_world_file(config.world_file, agent_radius=config.agent_radius)
-    run_id = config.run_id()
-    series = Series(run_id, "navigation", config.method, config.identity(), "episodes",
-                    config.worlds)  # fmt: skip
-    run_series(config, output, [series], work=_work, unit="episodes", workers=workers,
-               scheduler=scheduler, progress=progress, chunk=16)  # fmt: skip
-    return run_id
-
-
-def _work(
-    config: NavigationConfig, group: Any, k: int, todo: list[Series]
-) -> list[tuple[Series, EpisodeResult]]:
-    return [(s, evaluate_episode(config, k)) for s in todo]
+    return config.run_into(
+        output, experiment="navigation", method=config.method, table="episodes",
+        total=config.worlds, item=evaluate_episode, unit="episodes", chunk=16,
+        workers=workers, scheduler=scheduler, progress=progress,
+    )  # fmt: skip

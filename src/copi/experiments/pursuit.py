@@ -14,7 +14,7 @@ import numpy as np
 from copi._rng import check_seed
 from copi.core import Observation, Task
 from copi.errors import InvalidArgumentError
-from copi.experiments._runs import MAX_EPISODES, RunIdentity, Series, check_count, run_series
+from copi.experiments._runs import MAX_EPISODES, RunIdentity, check_count
 from copi.experiments.navigation import _capabilities
 from copi.games import ChauffeurParams
 from copi.games._world_game import ChauffeurGame
@@ -263,14 +263,8 @@ def pursue(
 ) -> str:
     """Run (or resume) Experiment 2 into ``output``; returns the run id."""
     config = config.resolved()
-    run_id = config.run_id()
-    series = Series(run_id, "pursuit", config.method, config.identity(), "games", config.games)
-    run_series(config, output, [series], work=_work, unit="games", workers=workers,
-               scheduler=scheduler, progress=progress, chunk=8)  # fmt: skip
-    return run_id
-
-
-def _work(
-    config: PursuitConfig, group: Any, k: int, todo: list[Series]
-) -> list[tuple[Series, GameRow]]:
-    return [(s, run_game(config, k)) for s in todo]
+    return config.run_into(
+        output, experiment="pursuit", method=config.method, table="games", total=config.games,
+        item=run_game, unit="games", chunk=8, workers=workers, scheduler=scheduler,
+        progress=progress,
+    )  # fmt: skip

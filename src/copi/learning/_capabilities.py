@@ -5,8 +5,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import zipfile
-import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -15,6 +13,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from copi._files import write_npz
+from copi._npz import read_metadata, read_npz
 from copi.errors import CapabilitiesFormatError
 from copi.learning._contexts import MOTION_CLIP, context_blocks, motion_contexts
 from copi.learning._policies import ActionPriors, PolicySet
@@ -202,41 +201,14 @@ class Capabilities:
             For a missing, truncated, foreign or newer file, saying which.
         """
         p = Path(path)
-        if not p.exists():
-            raise CapabilitiesFormatError(f"{p}: no such capabilities file")
-        if p.is_dir():
-            raise CapabilitiesFormatError(f"{p}: is a directory, expected a .npz capabilities file")
-        try:
-            arrays = _read_members(p)
-        except (zipfile.BadZipFile, EOFError, zlib.error) as exc:
-            raise CapabilitiesFormatError(
-                f"{p}: not a complete .npz archive (truncated or corrupt: {exc})"
-            ) from None
-        except (NotImplementedError, RuntimeError) as exc:  # other compression, encryption
-            raise CapabilitiesFormatError(f"{p}: not a copi capabilities file ({exc})") from None
-        except OSError as exc:
-            raise CapabilitiesFormatError(f"{p}: cannot read ({exc.strerror or exc})") from None
+        arrays = read_npz(p, _MEMBERS, error=CapabilitiesFormatError, what="capabilities file",
+                          max_member=MAX_MEMBER_BYTES, max_total=MAX_TOTAL_BYTES)  # fmt: skip
         return cls._from_arrays(p, arrays)
 
     @classmethod
     def _from_arrays(cls, p: Path, a: dict[str, NDArray[Any]]) -> Capabilities:
-        if "metadata" not in a:
-            raise CapabilitiesFormatError(f"{p}: not a copi capabilities file (no metadata entry)")
-        try:
-            meta = json.loads(str(a["metadata"][()]))
-        except (json.JSONDecodeError, TypeError, IndexError) as exc:
-            raise CapabilitiesFormatError(f"{p}: metadata is not JSON ({exc})") from None
-        found = meta.get("format") if isinstance(meta, dict) else None
-        if found != FORMAT:
-            raise CapabilitiesFormatError(f"{p}: not a copi capabilities file (format {found!r})")
-        version = meta.get("version")
-        if not isinstance(version, int) or version < 1:
-            raise CapabilitiesFormatError(f"{p}: bad format version {version!r}")
-        if version > FORMAT_VERSION:
-            raise CapabilitiesFormatError(
-                f"{p}: written by a newer copi (format version {version}); this copi reads "
-                f"versions up to {FORMAT_VERSION}: upgrade copi"
-            )
+        meta = read_metadata(a, p, fmt=FORMAT, version=FORMAT_VERSION,
+                             error=CapabilitiesFormatError, what="capabilities file")  # fmt: skip
         missing = [k for k in _REQUIRED if k not in a]
         if missing:
             raise CapabilitiesFormatError(f"{p}: missing arrays {missing}")
@@ -415,37 +387,6 @@ def _without_timings(stats: dict[str, Any]) -> dict[str, Any]:
             {k: v for k, v in st.items() if k != "seconds"} if isinstance(st, dict) else st
             for st in out["stages"]
         ]
-    return out
-
-
-def _read_members(p: Path) -> dict[str, NDArray[Any]]:
-    """The known members of the archive at ``p`` as arrays, each refused before it is
-    unpacked if it would be too large, and never unpickled."""
-    out: dict[str, NDArray[Any]] = {}
-    total = 0
-    with zipfile.ZipFile(p) as zf:
-        infos = {i.filename: i for i in zf.infolist()}
-        for name in _MEMBERS:
-            info = infos.get(f"{name}.npy")
-            if info is None:
-                continue
-            total += info.file_size
-            if info.file_size > MAX_MEMBER_BYTES or total > MAX_TOTAL_BYTES:
-                raise CapabilitiesFormatError(
-                    f"{p}: member {name!r} unpacks to {info.file_size:,} bytes, more than a "
-                    f"capabilities file holds (at most {MAX_MEMBER_BYTES:,} per member, "
-                    f"{MAX_TOTAL_BYTES:,} in all)"
-                )
-            with zf.open(info) as fh:
-                try:
-                    out[name] = np.lib.format.read_array(fh, allow_pickle=False)
-                except ValueError as exc:
-                    what = (
-                        "holds Python objects, which copi never loads"
-                        if "allow_pickle" in str(exc) or "Object arrays" in str(exc)
-                        else f"is not an array ({str(exc).splitlines()[0]})"
-                    )
-                    raise CapabilitiesFormatError(f"{p}: member {name!r} {what}") from None
     return out
 
 

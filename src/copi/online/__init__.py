@@ -5,7 +5,9 @@ answers (``Agent``, ``Task``, ``Observation``, sensing levels) is :mod:`copi.cor
 from __future__ import annotations
 
 from copi.online._agent import CopiAgent, Steering
-from copi.online._causal import CausalMap, CausalMapFormatError, CausalStrategy
+from copi.online._causal import CausalStrategy
+from copi.online._causal_file import CausalMapFormatError
+from copi.online._causal_map import CausalMap
 from copi.online._controller import ContextController, Decision
 from copi.online._learnt import LearntAgent
 from copi.online._mapping import Mapping

@@ -267,4 +267,4 @@ class LearntAgent(Agent):
     def counters(self) -> dict[str, Any]:
         """Per-episode diagnostics stored with the result."""
         rate = self.n_unfamiliar / self.n_decisions if self.n_decisions else 0.0
-        return {"unfamiliar": rate, "waits": self.n_waits, "grown": self.n_learnt}
+        return {"unfamiliar": float(rate), "waits": int(self.n_waits), "grown": int(self.n_learnt)}

@@ -11,6 +11,7 @@ import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
 
+from copi.core import Observation, Task
 from copi.errors import InvalidArgumentError
 from copi.world._generate import WorldParams, random_world
 from copi.world._io import load_worlds
@@ -21,6 +22,9 @@ from copi.world._world import ObstacleSpec, World
 __all__ = ["NavigationEnv"]
 
 ObsType = NDArray[np.float32]
+
+MAX_PIXELS = 4096
+"""The largest side of a rendered image (a larger one would take gigabytes)."""
 
 
 class NavigationEnv(gymnasium.Env[ObsType, ObsType]):
@@ -136,8 +140,12 @@ class NavigationEnv(gymnasium.Env[ObsType, ObsType]):
                 raise InvalidArgumentError("world must hold at least one world; got none")
             self.worlds = tuple(_as_world(w, "world") for w in items)
         for name, size in (("width", width), ("height", width if height is None else height)):
-            if int(size) != size or size < 1:
-                raise InvalidArgumentError(f"{name} must be a positive int; got {size!r}")
+            if isinstance(size, bool) or not isinstance(size, int | np.integer) or not (
+                1 <= size <= MAX_PIXELS
+            ):
+                raise InvalidArgumentError(
+                    f"{name} must be an int in 1 .. {MAX_PIXELS} pixels; got {size!r}"
+                )
         self.width = int(width)
         self.height = int(width if height is None else height)
         self.render_mode = render_mode
@@ -194,8 +202,19 @@ class NavigationEnv(gymnasium.Env[ObsType, ObsType]):
         sim = self.sim
         if sim is None:
             raise gymnasium.error.ResetNeeded("call reset() before step()")
+        try:
+            a = np.asarray(action, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise InvalidArgumentError(
+                f"action must be a velocity (vx, vy); got {type(action).__name__}"
+            ) from None
+        if a.shape != (2,) or not np.isfinite(a).all():
+            raise InvalidArgumentError(
+                f"action must be 2 finite numbers (vx, vy), as the action space {self.action_space}"
+                f" says; got {a.tolist() if a.size <= 8 else f'shape {a.shape}'}"
+            )
         before = sim.distance
-        res = sim.step(action)
+        res = sim.step(a)
         reward = (before - res.distance) - 0.01
         if res.reached:
             reward += 10.0
@@ -233,6 +252,24 @@ class NavigationEnv(gymnasium.Env[ObsType, ObsType]):
             "is_success": res.reached,
             "world": sim.world.name,
         }
+
+    def task(self) -> Task:
+        """What a copi :class:`~copi.core.Agent` is told of the current episode: its
+        observation is level ``sensor``'s (the ranges and the goal relative to the agent),
+        with this environment's radius, goal tolerance and sensor."""
+        if self.sim is None:
+            raise gymnasium.error.ResetNeeded("call reset() before task()")
+        return Task(sensing="sensor", agent_radius=self.agent_radius,
+                    goal_tolerance=self.goal_tolerance, n_rays=self.sensor.n_rays,
+                    max_range=self.sensor.max_range)  # fmt: skip
+
+    def observation(self) -> Observation:
+        """The current observation as a copi :class:`~copi.core.Observation` (level
+        ``sensor``; the goal unscaled)."""
+        sim = self.sim
+        if sim is None:
+            raise gymnasium.error.ResetNeeded("call reset() before observation()")
+        return Observation(ranges=sim.ranges.copy(), goal=sim.goal - sim.position)
 
     def render(self) -> NDArray[np.uint8] | None:  # type: ignore[override]
         if self.render_mode is None:

@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-import importlib.metadata
 import os
-import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -13,6 +11,7 @@ import numpy as np
 import shapely
 from shapely.geometry import LineString
 
+from copi._plugins import Registry
 from copi._rng import Seed, as_generator
 from copi.errors import InvalidArgumentError
 from copi.geometry._arrays import as_vector
@@ -36,8 +35,6 @@ __all__ = [
     "sample_world",
     "unregister_family",
 ]
-
-_NAME = re.compile(r"^[a-z0-9][a-z0-9_.-]*$")
 
 FAMILIES = ("crowd", "indoor", "maps", "polygon", "star")
 """Names of copi's own world families, sorted (see :func:`sample_world`); other packages
@@ -67,8 +64,7 @@ class FamilySpec:
     resume into a run."""
 
 
-_FAMILIES: dict[str, FamilySpec] = {}
-_plugins = "no"
+_FAMILIES: Registry[FamilySpec] = Registry("family", ENTRY_POINTS, "families")
 
 
 def register_family(
@@ -94,64 +90,27 @@ def register_family(
     ('square', True)
     >>> unregister_family("doc-square")
     """
-    if not isinstance(name, str) or not _NAME.match(name):
-        raise InvalidArgumentError(
-            f"a family's name must be lower-case letters, digits, '-', '_' or '.'; got {name!r}"
-        )
     if not callable(sampler):
         raise InvalidArgumentError(f"the sampler of {name} must be callable; got {sampler!r}")
-    spec = FamilySpec(name, sampler, summary, inputs)
-    old = _FAMILIES.get(name)
-    if old is not None and not replace:
-        if old.sampler is sampler:
-            return old
-        raise InvalidArgumentError(
-            f"a family named {name!r} is registered already; pass replace=True to register "
-            "over it"
-        )
-    _FAMILIES[name] = spec
-    return spec
+    old = _FAMILIES.current(name)
+    same = old is not None and old.sampler is sampler
+    return _FAMILIES.add(name, FamilySpec(name, sampler, summary, inputs), same=same,
+                         replace=replace)  # fmt: skip
 
 
 def unregister_family(name: str) -> None:
     """Remove a registered family (e.g. one a test registered); copi's own stay."""
-    if name in FAMILIES:
-        raise InvalidArgumentError(f"{name} is one of copi's own families; it stays registered")
-    _FAMILIES.pop(name, None)
-
-
-def _load_plugins() -> None:
-    global _plugins
-    if _plugins != "no":
-        return
-    _plugins = "loading"
-    try:
-        for ep in importlib.metadata.entry_points(group=ENTRY_POINTS):
-            try:
-                hook = ep.load()
-                if callable(hook):
-                    hook()
-            except Exception as exc:
-                raise InvalidArgumentError(
-                    f"entry point {ep.name!r} ({ep.value}) of {ENTRY_POINTS} cannot be loaded "
-                    f"({type(exc).__name__}: {exc})"
-                ) from None
-    finally:
-        _plugins = "yes"
+    _FAMILIES.remove(name)
 
 
 def family_names() -> tuple[str, ...]:
     """Every registered family: copi's own (sorted), then those of other packages."""
-    _load_plugins()
-    return tuple(_FAMILIES)
+    return _FAMILIES.names()
 
 
 def family_spec(family: str) -> FamilySpec:
     """A registered family by name; an unknown name is refused, listing the known ones."""
     spec = _FAMILIES.get(family)
-    if spec is None:
-        _load_plugins()
-        spec = _FAMILIES.get(family)
     if spec is None:
         raise InvalidArgumentError(
             f"family must be one of {', '.join(family_names())}; got {family!r}"
@@ -275,6 +234,7 @@ for _name, _sampler, _summary, _inputs in (
     ("star", _star, "the paper's random star-shaped polygons of 4 to 12 sides", None),
 ):  # fmt: skip
     register_family(_name, _sampler, summary=_summary, inputs=_inputs)
+_FAMILIES.seal()
 
 
 def in_sight(world: World, a: Any, b: Any, *, radius: float = 0.0) -> bool:

@@ -1,0 +1,116 @@
+"""Third-party extensions through entry points (as Gymnasium loads environments and
+navground behaviours): each entry point of a group names a callable taking no argument
+that registers what its package adds when called."""
+
+from __future__ import annotations
+
+import importlib.metadata
+import re
+import threading
+from typing import Generic, TypeVar
+
+from copi.errors import CopiError, InvalidArgumentError
+
+__all__ = ["Registry", "load_entry_points"]
+
+_LOADED: set[tuple[str, str, str]] = set()
+_LOCK = threading.RLock()
+
+
+def load_entry_points(group: str) -> int:
+    """Call every entry point of ``group`` not called yet in this process (a package
+    installed, or put on the path, since the last call is picked up); returns how many
+    were called. An entry point that cannot be loaded, or whose call fails, is refused in
+    one line naming it."""
+    called = 0
+    with _LOCK:
+        for ep in importlib.metadata.entry_points(group=group):
+            key = (group, ep.name, ep.value)
+            if key in _LOADED:
+                continue
+            _LOADED.add(key)  # once, even if it fails: the error says so
+            try:
+                hook = ep.load()
+                if callable(hook):
+                    hook()
+            except CopiError as exc:
+                raise InvalidArgumentError(
+                    f"entry point {ep.name!r} ({ep.value}) of {group}: {exc}"
+                ) from None
+            except Exception as exc:
+                raise InvalidArgumentError(
+                    f"entry point {ep.name!r} ({ep.value}) of {group} cannot be loaded "
+                    f"({type(exc).__name__}: {exc})"
+                ) from None
+            called += 1
+    return called
+
+
+_NAME = re.compile(r"^[a-z0-9][a-z0-9_.-]*$")
+"""A registered name: lower-case letters, digits, ``-``, ``_``, ``.`` (``@``, ``:``, ``+``
+and ``/`` belong to the command line's grammar, never to a name)."""
+
+T = TypeVar("T")
+
+
+class Registry(Generic[T]):
+    """Named things of one kind (methods, world families): copi's own, registered at
+    import, and other packages', registered by their entry points (group ``group``) the
+    first time a name is not found or the names are listed."""
+
+    def __init__(self, kind: str, group: str, plural: str | None = None) -> None:
+        self.kind = kind
+        self.plural = plural or f"{kind}s"
+        self.group = group
+        self._items: dict[str, T] = {}
+        self._own: frozenset[str] = frozenset()
+
+    def add(self, name: str, item: T, *, same: bool, replace: bool = False) -> T:
+        """Register ``item`` as ``name``; a name taken is refused unless ``replace`` or
+        ``same`` (the same registration again, which keeps the first)."""
+        if not isinstance(name, str) or not _NAME.match(name):
+            raise InvalidArgumentError(
+                f"a {self.kind}'s name must be lower-case letters, digits, '-', '_' or '.'; "
+                f"got {name!r}"
+            )
+        with _LOCK:
+            old = self._items.get(name)
+            if old is not None and not replace:
+                if same:
+                    return old
+                raise InvalidArgumentError(
+                    f"a {self.kind} named {name!r} is registered already; pass replace=True "
+                    "to register over it"
+                )
+            self._items[name] = item
+        return item
+
+    def current(self, name: str) -> T | None:
+        """What ``name`` is registered as now (entry points not consulted)."""
+        return self._items.get(name)
+
+    def seal(self) -> None:
+        """What is registered now is copi's own: it cannot be removed."""
+        self._own = frozenset(self._items)
+
+    def remove(self, name: str) -> None:
+        """Forget a registered name (e.g. one a test registered); copi's own stay."""
+        if name in self._own:
+            raise InvalidArgumentError(f"{name} is one of copi's own {self.plural}; it stays "
+                                       "registered")  # fmt: skip
+        with _LOCK:
+            self._items.pop(name, None)
+
+    def get(self, name: str) -> T | None:
+        """The item of ``name``, loading the entry points not loaded yet when it is not
+        registered; None when no one registers it."""
+        item = self._items.get(name)
+        if item is None:
+            load_entry_points(self.group)
+            item = self._items.get(name)
+        return item
+
+    def names(self) -> tuple[str, ...]:
+        """Every registered name: copi's own first, in the order registered."""
+        load_entry_points(self.group)
+        return tuple(self._items)

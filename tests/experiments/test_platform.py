@@ -1,0 +1,100 @@
+"""The platform's entry points: copi's agent in the Gymnasium env, a benchmark of one's
+own worlds, help that names what is registered, one reader for copi's npz files."""
+
+from __future__ import annotations
+
+import json
+import zipfile
+from pathlib import Path
+
+import gymnasium
+import numpy as np
+import pytest
+
+import copi  # noqa: F401  (registers the environments)
+from copi.experiments import make_agent, run_in_env
+from copi.learning import Capabilities
+from copi.world import World, save_worlds
+from tests.cli.test_faults import _one_line_error, run
+from tests.common import U_TRAP
+
+
+def test_copi_s_own_agent_runs_in_the_gymnasium_env(learnt_caps: Path) -> None:
+    agent = make_agent("copi-learnt", Capabilities.load(learnt_caps))
+    env = gymnasium.make("copi/Navigation-v0", max_episode_steps=200)
+    outcomes = [run_in_env(agent, env, seed=s) for s in range(4)]
+    for out in outcomes:
+        assert out.outcome in ("success", "collision", "timeout") and 1 <= out.steps <= 200
+        assert out.outcome != "success" or out.info["is_success"]
+    again = run_in_env(make_agent("copi-learnt", Capabilities.load(learnt_caps)), env, seed=2)
+    assert (again.steps, again.reward) == (outcomes[2].steps, outcomes[2].reward)
+    # the env's radius and tolerance are what the agent is told, not guessed
+    task = env.unwrapped.task()
+    assert (task.agent_radius, task.goal_tolerance, task.sensing) == (0.3, 0.5, "sensor")
+    with pytest.raises(ValueError, match="is not a copi.core.Agent"):
+        run_in_env(object(), env)  # type: ignore[arg-type]
+
+
+def test_the_benchmark_runs_a_user_s_world_file(tmp_path: Path, capsys) -> None:
+    worlds = tmp_path / "mine.json"
+    room = World(np.array([[0, 0], [30, 0], [30, 20], [0, 20]], dtype=float), name="hall")
+    save_worlds([room, U_TRAP], worlds)
+    out = tmp_path / "b"
+    code, text, err = run(["benchmark", "-o", str(out), "--world-file", str(worlds),
+                           "--methods", "straight@map,dwa@map", "--episodes", "4",
+                           "--workers", "1"], capsys)  # fmt: skip
+    assert code == 0, err
+    assert "## worlds of mine.json (4 episodes)" in text
+    from copi.experiments.store import ResultsStore
+
+    with ResultsStore(out / "benchmark.sqlite", readonly=True) as store:
+        rows = store.episodes()
+        configs = [r.config for r in store.runs()]
+    assert {r.family for r in rows} == {"file:mine.json"}
+    assert {r.world for r in rows} == {"hall", "u-trap"}  # episode k in world k mod 2
+    assert all(c["world_file_sha"] for c in configs)
+    # the file changed: refused, nothing mixed
+    save_worlds([room], worlds)
+    code, _, err = run(["benchmark", "-o", str(out), "--world-file", str(worlds),
+                        "--methods", "straight@map", "--episodes", "4", "--workers", "1"],
+                       capsys)  # fmt: skip
+    assert "the world file's content changed since" in _one_line_error(code, err)
+    code, _, err = run(["benchmark", "-o", str(tmp_path / "c"), "--world-file", str(worlds),
+                        "--families", "star"], capsys)  # fmt: skip
+    assert "--world-file and --families do not go together" in _one_line_error(code, err)
+
+
+def test_help_names_the_registered_methods_and_families(capsys) -> None:
+    code, text, _ = run(["evaluate", "--help"], capsys)
+    flat = " ".join(text.split())
+    assert code == 0 and "Methods: copi-faithful, copi-extended, copi-learnt" in flat
+    assert "Families: crowd, indoor, maps, polygon, star" in flat and "Presets: faithful" in flat
+    code, text, _ = run(["list"], capsys)
+    assert code == 0 and "navground-hl" in text and "two rooms" not in text
+
+
+def test_a_causal_map_s_unknown_members_are_never_read(tmp_path: Path) -> None:
+    from copi.online import CausalMap
+
+    path = CausalMap().save(tmp_path / "m.npz", world="w")
+    with zipfile.ZipFile(path, "a") as zf:  # a member whose stream is garbage: unread
+        zf.writestr(zipfile.ZipInfo("huge.npy"), b"\x93NUMPY" + b"\x00" * 64)
+    cmap, occ = CausalMap.load(path, world="w")
+    assert cmap.n_options == 0 and occ is None
+    # a known member claiming more than a map holds is refused before it is unpacked
+    from copi.online import CausalMapFormatError
+    from copi.online._causal_file import MAX_MEMBER_BYTES
+
+    big = tmp_path / "big.npz"
+    with zipfile.ZipFile(big, "w", compression=zipfile.ZIP_DEFLATED) as zf:
+        meta = {"format": "copi-causal-map", "version": 1, "params": {}, "world": "",
+                "capabilities": ""}  # fmt: skip
+        with zf.open("metadata.npy", "w") as fh:
+            np.lib.format.write_array(fh, np.array(json.dumps(meta)))
+        with zf.open("n.npy", "w", force_zip64=True) as fh:
+            chunk = b"\x00" * (1 << 20)
+            for _ in range(MAX_MEMBER_BYTES // len(chunk) + 2):
+                fh.write(chunk)
+    assert big.stat().st_size < 2_000_000
+    with pytest.raises(CausalMapFormatError, match="member 'n' unpacks to .* bytes, more than"):
+        CausalMap.load(big)

@@ -98,3 +98,50 @@ def test_a_causal_map_s_unknown_members_are_never_read(tmp_path: Path) -> None:
     assert big.stat().st_size < 2_000_000
     with pytest.raises(CausalMapFormatError, match="member 'n' unpacks to .* bytes, more than"):
         CausalMap.load(big)
+
+
+def test_rows_of_an_older_store_read_with_method_level_and_strategy_apart(tmp_path: Path) -> None:
+    import sqlite3
+
+    from copi.experiments.store import ResultsStore
+
+    path = tmp_path / "old.sqlite"
+    with ResultsStore(path) as store:  # written as copi 0.2 named things
+        store.begin("r1", "lifelong", "dwa+mapping", {"family": "indoor", "sensing": "sensor"})
+        store.begin("r2", "benchmark", "copi-learnt+priors",
+                    {"family": "star", "sensing": "sensor", "strategy": "mapping"})  # fmt: skip
+    with sqlite3.connect(path) as db:
+        db.execute(
+            "INSERT INTO lifelong (run_id, experiment, method, world, life, task, seed, family, "
+            "sensing, outcome, success, steps) VALUES ('r1', 'lifelong', 'dwa+mapping', 'w', 0, "
+            "0, 0, 'indoor', 'sensor', 'success', 1, 10)"
+        )
+        db.execute(
+            "INSERT INTO episodes (run_id, experiment, method, world, episode, seed, success, "
+            "reached, collided, timed_out, steps, contacts, family, sensing, outcome) VALUES "
+            "('r2', 'benchmark', 'copi-learnt+priors', 'w', 0, 0, 1, 1, 0, 0, 10, 0, 'star', "
+            "'sensor', 'success')"
+        )
+        db.execute("UPDATE lifelong SET strategy = NULL")
+        db.execute("UPDATE episodes SET strategy = NULL")
+    with ResultsStore(path, readonly=True) as store:
+        (life,) = store.lifelong()
+        (episode,) = store.episodes()
+    assert (life.method, life.sensing, life.strategy) == ("dwa", "sensor", "mapping")
+    assert (episode.method, episode.sensing, episode.strategy) == (
+        "copi-learnt-priors", "sensor", "mapping")  # fmt: skip
+    assert episode["success"] is True and episode.get("nothing", 3) == 3
+
+
+def test_registered_parameters_are_the_classes_defaults() -> None:
+    import inspect
+
+    from copi.experiments import method_spec
+
+    # a method that is a class's own default configuration registers nothing over it
+    for name in ("copi-faithful", "copi-learnt", "straight", "compass-guard", "vfh", "dwa",
+                 "tangent-bug", "replan"):  # fmt: skip
+        spec = method_spec(name)
+        sig = inspect.signature(spec.factory)
+        defaults = {k: p.default for k, p in sig.parameters.items() if k in spec.params}
+        assert spec.params == defaults, name

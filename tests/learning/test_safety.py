@@ -92,7 +92,7 @@ def test_learnt_capabilities_round_trip_and_are_checked(learnt: Capabilities, tm
     bad = dict(np.load(path))
     bad["safety_net"] = bad["safety_net"][:, :, :-1]
     np.savez(tmp_path / "bad.npz", **bad)
-    with pytest.raises(CapabilitiesFormatError, match="safety networks must have shape"):
+    with pytest.raises(CapabilitiesFormatError, match=r"safety networks have shape \(2, 17, 128\); training makes \(2, 17, 129\)"):
         Capabilities.load(tmp_path / "bad.npz")
 
 

@@ -77,11 +77,40 @@ class ChauffeurEnv(ParallelEnv):  # type: ignore[misc]
         }
         self.game: ChauffeurGame | None = None
 
+    def _agent(self, agent: Any) -> str:
+        if agent not in self.possible_agents:
+            raise InvalidArgumentError(
+                f"agent must be one of {', '.join(self.possible_agents)}; got {agent!r}"
+            )
+        return str(agent)
+
     def observation_space(self, agent: str) -> spaces.Space[Any]:
-        return self._obs_spaces[agent]
+        return self._obs_spaces[self._agent(agent)]
 
     def action_space(self, agent: str) -> spaces.Space[Any]:
-        return self._act_spaces[agent]
+        return self._act_spaces[self._agent(agent)]
+
+    def _action(self, actions: Any, agent: str) -> NDArray[np.float64]:
+        """``actions[agent]`` checked against the agent's action space (shape, finite)."""
+        if not isinstance(actions, dict) or agent not in actions:
+            got = sorted(actions) if isinstance(actions, dict) else type(actions).__name__
+            raise InvalidArgumentError(
+                f"step needs an action for each of {', '.join(self.agents)}; got {got}"
+            )
+        shape = self._act_spaces[agent].shape
+        try:
+            a = np.asarray(actions[agent], dtype=np.float64)
+        except (TypeError, ValueError):
+            raise InvalidArgumentError(
+                f"the {agent}'s action must be {shape[0]} number(s); got "
+                f"{type(actions[agent]).__name__}"
+            ) from None
+        if a.shape != shape or not np.isfinite(a).all():
+            raise InvalidArgumentError(
+                f"the {agent}'s action must be {shape[0]} finite number(s) (its action space "
+                f"is {self._act_spaces[agent]}); got {a.tolist() if a.size <= 8 else a.shape}"
+            )
+        return a
 
     def reset(
         self, seed: int | None = None, options: dict[str, Any] | None = None
@@ -116,8 +145,14 @@ class ChauffeurEnv(ParallelEnv):  # type: ignore[misc]
             raise InvalidArgumentError(
                 "call reset() before step(), and again after an episode ends"
             )
-        u = float(np.clip(np.asarray(actions["pursuer"]).reshape(-1)[0], -1, 1))
-        captured = g.step(np.asarray(actions["evader"], dtype=np.float64), pursuer_control=u)
+        extra = sorted(set(actions) - set(self.agents)) if isinstance(actions, dict) else []
+        if extra:
+            raise InvalidArgumentError(
+                f"step got actions of {', '.join(map(str, extra))}, which are not among the "
+                f"agents ({', '.join(self.agents)})"
+            )
+        u = float(np.clip(self._action(actions, "pursuer")[0], -1, 1))
+        captured = g.step(self._action(actions, "evader"), pursuer_control=u)
         obs = self._observations()
         if captured:
             rewards = {"pursuer": 10.0, "evader": -10.0}

@@ -17,7 +17,7 @@ from copi._npz import read_metadata, read_npz
 from copi.errors import CapabilitiesFormatError
 from copi.learning._contexts import MOTION_CLIP, context_blocks, motion_contexts
 from copi.learning._policies import ActionPriors, PolicySet
-from copi.learning._safety import SafetyModel
+from copi.learning._safety import HIDDEN, SafetyModel
 from copi.learning._skeleton import Landmarks
 from copi.learning._symmetry import Operator, Reduction, SymmetryGroup
 
@@ -39,6 +39,16 @@ _MEMBERS = (*_REQUIRED, "prior_counts", "prior_probabilities", *_SAFETY, "metada
 MAX_MEMBER_BYTES = 1 << 28
 """A member unpacking to more than this (256 MiB) is refused before it is unpacked."""
 MAX_TOTAL_BYTES = 1 << 30
+MAX_RANGE = 1000.0
+"""Largest sensor range a file may give (agent steps)."""
+MAX_RADIUS = 10.0
+"""Largest agent radius a file may give (agent steps)."""
+MAX_RAYS = 1024
+MAX_COUNT = 1e9
+"""Largest count (probes, moves) a file may hold: learning makes at most millions."""
+MAX_WEIGHT = 1e3
+"""Largest absolute weight of a safety network (trained with L2 regularisation, its
+weights stay within tens)."""
 _NDIM = {
     "nodes": 2, "edges": 2, "lm_points": 2, "lm_members": 1, "lm_node_landmark": 1,
     "lm_anchors": 1, "lm_curve": 1, "lm_criterion": 1, "lm_merges": 2, "op_perms": 2,
@@ -420,17 +430,23 @@ def _check_arrays(p: Path, meta: dict[str, Any], a: dict[str, NDArray[Any]]) -> 
         if not ok:
             raise CapabilitiesFormatError(f"{p}: member {name!r} holds NaN or infinite values")
     params, stats = meta.get("params", {}), meta.get("stats", {})
-    for key, where in (("max_range", params), ("agent_radius", params)):
-        v = where.get(key)
-        if v is not None and not (_number(v) and math.isfinite(v) and v > 0):
-            raise CapabilitiesFormatError(f"{p}: parameter {key} must be a number > 0; got {v!r}")
+    for key, top in (("max_range", MAX_RANGE), ("agent_radius", MAX_RADIUS)):
+        v = params.get(key)
+        if v is not None and not (_number(v) and math.isfinite(v) and 0 < v <= top):
+            raise CapabilitiesFormatError(
+                f"{p}: parameter {key} must be a number in (0, {top:g}]; got {v!r}"
+            )
     for key in ("familiarity_threshold", "quantization_error"):
         v = stats.get(key)
         if v is not None and not (_number(v) and v >= 0):
             raise CapabilitiesFormatError(f"{p}: statistic {key} must be a number >= 0; got {v!r}")
     rays = params.get("n_rays")
-    if rays is not None and not (isinstance(rays, int) and not isinstance(rays, bool)):
-        raise CapabilitiesFormatError(f"{p}: parameter n_rays must be an int; got {rays!r}")
+    if rays is not None and not (
+        isinstance(rays, int) and not isinstance(rays, bool) and 4 <= rays <= MAX_RAYS
+    ):
+        raise CapabilitiesFormatError(
+            f"{p}: parameter n_rays must be an int in 4 .. {MAX_RAYS}; got {rays!r}"
+        )
 
 
 def _number(v: Any) -> bool:
@@ -496,17 +512,40 @@ def _more_problems(c: Capabilities) -> list[str]:
     start = pol.path_start
     if start.size and (start[0] != 0 or (np.diff(start) < 0).any()):
         problems.append("policy path offsets are not increasing from 0")
-    if c.priors is not None and (
-        c.priors.counts.shape != (T, D) or c.priors.probabilities.shape != (T, D)
-    ):
-        problems.append(f"action priors must have shape ({T}, {D})")
+    if c.priors is not None:
+        if c.priors.counts.shape != (T, D) or c.priors.probabilities.shape != (T, D):
+            problems.append(f"action priors must have shape ({T}, {D})")
+        problems += _counts_and_probabilities("action priors", c.priors.counts,
+                                              c.priors.probabilities)  # fmt: skip
     if c.safety is not None:
         net = c.safety.net
         f = 1 + 4 * c.n_rays
-        if net.ndim != 3 or net.shape[0] != 2 or net.shape[2] != f or net.shape[1] < 2:
-            problems.append(f"the safety networks must have shape (2, h + 1, {f})")
+        if net.shape != (2, HIDDEN + 1, f):
+            problems.append(
+                f"the safety networks have shape {net.shape}; training makes (2, {HIDDEN + 1}, "
+                f"{f}) ({HIDDEN} hidden units over {c.n_rays} rays)"
+            )
+        elif not (np.abs(net) <= MAX_WEIGHT).all():
+            problems.append(
+                f"the safety networks hold weights beyond +-{MAX_WEIGHT:g}, which no training "
+                "yields"
+            )
+        elif not np.abs(net).reshape(2, -1).max(1).all():
+            problems.append("a safety network is all zero (nothing training yields)")
         if c.safety.template_safe.shape != (T, D) or c.safety.template_counts.shape != (T, D):
             problems.append(f"safety priors must have shape ({T}, {D})")
-        if not (np.isfinite(net).all() and np.isfinite(c.safety.template_safe).all()):
-            problems.append("safety priors are not finite")
+        problems += _counts_and_probabilities("safety priors", c.safety.template_counts,
+                                              c.safety.template_safe)  # fmt: skip
     return problems
+
+
+def _counts_and_probabilities(what: str, counts: NDArray[Any], prob: NDArray[Any]) -> list[str]:
+    """Counts are whole numbers in 0 .. MAX_COUNT; probabilities in [0, 1]."""
+    out = []
+    if counts.size and not (
+        (counts >= 0).all() and (counts <= MAX_COUNT).all() and (counts == np.round(counts)).all()
+    ):
+        out.append(f"{what} hold counts that are not whole numbers in 0 .. {MAX_COUNT:g}")
+    if prob.size and not ((prob >= 0).all() and (prob <= 1).all()):
+        out.append(f"{what} hold probabilities outside [0, 1]")
+    return out

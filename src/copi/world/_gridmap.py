@@ -27,6 +27,8 @@ __all__ = ["BLOCKED", "PASSABLE", "GridMap", "cell_center", "free_geometry", "re
 
 PASSABLE = frozenset(".G")
 BLOCKED = frozenset("@OTSW")
+MAX_SIDE = 8192
+"""The largest height or width of a map read (Moving AI's largest are 1024 x 1024)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -49,6 +51,14 @@ def read_map(path: str | os.PathLike[str]) -> GridMap:
     """Read a ``.map`` file; a malformed one raises :class:`MapFileError` with its line."""
     p = Path(path)
     try:
+        size = p.stat().st_size
+    except OSError as exc:
+        raise MapFileError(f"{p}: cannot read a Moving AI map ({exc.strerror or exc})") from None
+    if size > (MAX_SIDE + 2) * (MAX_SIDE + 1) + 4096:
+        raise MapFileError(
+            f"{p}: {size:,} bytes, more than a map of at most {MAX_SIDE} x {MAX_SIDE} cells holds"
+        )
+    try:
         lines = p.read_text(encoding="ascii").splitlines()
     except (OSError, UnicodeDecodeError) as exc:
         raise MapFileError(f"{p}: cannot read a Moving AI map ({exc})") from None
@@ -70,6 +80,10 @@ def read_map(path: str | os.PathLike[str]) -> GridMap:
         raise MapFileError(
             f"{p}: header must give integer 'height' and 'width'; got {header}"
         ) from None
+    if not (1 <= h <= MAX_SIDE and 1 <= w <= MAX_SIDE):
+        raise MapFileError(
+            f"{p}: height and width must be in 1 .. {MAX_SIDE} cells; got height {h}, width {w}"
+        )
     rows = lines[i + 1 : i + 1 + h]
     if len(rows) != h:
         raise MapFileError(f"{p}: expected {h} map rows; found {len(rows)}")
@@ -82,6 +96,8 @@ def read_map(path: str | os.PathLike[str]) -> GridMap:
         if unknown:
             raise MapFileError(f"{p}:{i + 2 + y}: unknown cell characters {sorted(unknown)}")
         grid[y] = [c in PASSABLE for c in row[:w]]
+    if not grid.any():
+        raise MapFileError(f"{p}: no passable cell ('.' or 'G'): nothing to move in")
     return GridMap(p.name, grid)
 
 

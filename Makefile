@@ -22,6 +22,10 @@ $(STAMP): pyproject.toml
 	$(BIN)/python -m pip install --quiet -e '.[dev]'
 	$(BIN)/python -m pip install --quiet -e '.[dev,peers]' || \
 		echo "make: navground could not be installed: the benchmark leaves its peers out"
+	($(BIN)/python tools/cpu_torch.py && \
+		$(BIN)/python -m pip install --quiet 'torch==2.13.0' && \
+		$(BIN)/python -m pip install --quiet -e '.[dev,peers,rl]') || \
+		echo "make: no CPU build of torch here: RL training (copi rl train) is left out"
 	$(BIN)/python -m copi._warmup
 	touch $(STAMP)
 

@@ -91,7 +91,7 @@ def test_without_navground_its_peers_say_so_and_the_rest_still_work(monkeypatch)
         assert not method_spec(name).available()
         with pytest.raises(
             InvalidArgumentError,
-            match=f"{name} needs the optional extra 'peers', which is not installed: "
+            match=f"{name} needs navground, which is not installed: "
             "pip install 'copi\\[peers\\]'",
         ):
             make_agent(name)

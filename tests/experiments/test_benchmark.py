@@ -154,7 +154,7 @@ def test_benchmark_without_navground(
     code, _, err = run(
         ["benchmark", "-o", str(tmp_path / "b"), "--methods", "navground-hl"], capsys
     )
-    assert code == 2 and "navground-hl needs the optional extra 'peers'" in err
+    assert code == 2 and "navground-hl needs navground, which is not installed" in err
     assert not (tmp_path / "b").exists()
     code, out, err = run(
         ["benchmark", "-o", str(tmp_path / "c"), "--methods", "straight@map,dwa@map",

@@ -11,6 +11,8 @@ name                level     what it is
 ``vfh``             sensor    Vector Field Histogram (VFH+) on the ranges
 ``dwa``             sensor    Dynamic Window (velocity sampling) on the ranges
 ``tangent-bug``     sensor    TangentBug on the ranges
+``ppo``             sensor    a local policy learnt by PPO, run in numpy (``ppo-guard``:
+                              shielded by compass-guard's guard)
 ``replan``          oracle    shortest path on the current snapshot, re-planned
 ``navground-hrvo``  oracle    navground's HRVO (optional extra ``peers``)
 ``navground-hl``    oracle    navground's HL (optional extra ``peers``)
@@ -30,6 +32,15 @@ from copi.baselines._navground import (
     NavgroundMissingError,
     navground_available,
 )
+from copi.baselines._ppo import (
+    PolicyFormatError,
+    PolicyWeights,
+    PPOAgent,
+    features,
+    load_policy,
+    packaged_policy,
+    save_policy,
+)
 from copi.baselines._replan import Replan
 from copi.baselines._simple import CompassGuard, Straight
 from copi.baselines._tangent_bug import TangentBug
@@ -41,9 +52,16 @@ __all__ = [
     "NAVGROUND_BEHAVIORS",
     "NavgroundAgent",
     "NavgroundMissingError",
+    "PPOAgent",
+    "PolicyFormatError",
+    "PolicyWeights",
     "Replan",
     "Straight",
     "TangentBug",
     "VFH",
+    "features",
+    "load_policy",
     "navground_available",
+    "packaged_policy",
+    "save_policy",
 ]

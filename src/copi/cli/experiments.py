@@ -199,18 +199,16 @@ def benchmark_command(
     for f in fams:
         check_family(f)
     chosen = parse_methods(methods, strategy=sensor_strategy)
-    missing = [r for r in chosen if not method_spec(r.method).available()]
+    missing = {r.method for r in chosen if not method_spec(r.method).available()}
     if methods is None and missing:
-        console.print(
-            "copi: " + ", ".join(sorted({r.method for r in missing})) + " left out: their "
-            "optional extras are not installed (pip install 'copi[peers]')", highlight=False,
-        )  # fmt: skip
-        chosen = [r for r in chosen if method_spec(r.method).available()]
+        for name in sorted(missing):
+            console.print(f"copi: {name} is left out: it needs {method_spec(name).missing}",
+                          highlight=False)  # fmt: skip
+        chosen = [r for r in chosen if r.method not in missing]
     for r in chosen:
         spec = method_spec(r.method)
         if not spec.available():
-            raise CopiError(f"{r.method} needs the optional extra {spec.requires!r}, which is "
-                            f"not installed: pip install 'copi[{spec.requires}]'")  # fmt: skip
+            raise CopiError(f"{r.method} needs {spec.missing}")
     if against is not None:
         method_spec(against)
         if against not in {r.method for r in chosen}:

@@ -24,7 +24,7 @@ from copi.cli._common import app, console
 from copi.errors import CopiError
 
 # Importing a group's module registers its commands; this order is the order of --help.
-for _group in ("world", "learning", "experiments", "watch"):
+for _group in ("world", "learning", "experiments", "watch", "rl"):
     importlib.import_module(f"copi.cli.{_group}")
 
 

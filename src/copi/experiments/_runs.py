@@ -146,6 +146,13 @@ class RunIdentity:
             from copi.world import family_inputs
 
             changes["inputs"] = family_inputs(getattr(self, "family"))  # noqa: B009
+        method = getattr(self, "method", None)
+        if hasattr(self, "inputs") and isinstance(method, str):
+            from copi.experiments.methods import method_spec
+
+            extra = method_spec(method).input_hashes()
+            if extra:
+                changes["inputs"] = {**changes.get("inputs", {}), **extra}
         return dataclasses.replace(self, **changes)  # type: ignore[type-var]
 
     def identity(self) -> dict[str, Any]:

@@ -140,6 +140,10 @@ class BenchmarkConfig:
                 if method_spec(run.method).capabilities == preset:
                     check_method_capabilities(run.method, caps, path)
             shas[preset] = file_sha(path)
+        for run in self.methods:  # each method built once: the files it reads are checked
+            needs = method_spec(run.method).capabilities
+            make_agent(run.method, None if needs is None else _capabilities(
+                self.capabilities[needs], shas[needs]))  # fmt: skip
         if self.world_file is not None:
             check_world_file(self.world_file, agent_radius=self.agent_radius)
             inputs = {self.groups[0]: {"world_file_sha": file_sha(self.world_file)}}
@@ -166,6 +170,7 @@ class BenchmarkConfig:
         }
         if spec.capabilities is not None:
             ident["capabilities_sha"] = self.capabilities_sha.get(spec.capabilities, "")
+        ident.update(spec.input_hashes())
         return ident
 
     def run_id(self, family: str, run: MethodRun) -> str:

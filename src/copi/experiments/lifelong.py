@@ -155,6 +155,9 @@ class LifelongConfig:
     def resolved(self) -> LifelongConfig:
         """With the capabilities file's content hash (checks it loads and has what the
         learnt preset needs)."""
+        for run in self.methods:  # methods that read no capabilities, built once now
+            if method_spec(run.method).capabilities is None:
+                make_agent(run.method)
         if self.capabilities is None:
             return dataclasses.replace(self, inputs=family_inputs(self.family))
         from copi.experiments.presets import check_preset_capabilities
@@ -216,6 +219,7 @@ class LifelongConfig:
             ident["capabilities_sha"] = self.capabilities_sha
         if self.from_maps is not None and run.strategy == "causal":
             ident["from_maps_sha"] = self.from_maps_sha
+        ident.update(spec.input_hashes())
         return ident
 
     def run_id(self, run: MethodRun) -> str:

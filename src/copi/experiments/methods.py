@@ -44,10 +44,12 @@ from copi.baselines import (
     VFH,
     CompassGuard,
     NavgroundAgent,
+    PPOAgent,
     Replan,
     Straight,
     TangentBug,
     navground_available,
+    packaged_policy,
 )
 from copi.core import SENSING_LEVELS, Agent, Sensing, check_sensing, check_strategy
 from copi.errors import InvalidArgumentError
@@ -103,12 +105,21 @@ class MethodSpec:
     """The optional extra it needs ("peers": navground; "rl": the RL extra), else None."""
     available: Callable[[], bool] = field(default=lambda: True, compare=False, repr=False)
     """Whether what it needs is installed."""
+    missing: str = ""
+    """What is missing when it is not available, and how to get it (one sentence)."""
     ablation: bool = False
     """An ablation of a copi mode: run when asked (``--methods ablations``)."""
     default: bool = False
     """Run by the benchmark when no method is named (copi's reference set)."""
     bound: bool = False
     """A bound on what is possible (a ceiling), not a method: marked so in every table."""
+    inputs: Callable[[], dict[str, str]] | None = field(default=None, compare=False, repr=False)
+    """Content hashes of the files the method reads (e.g. trained weights), by name: part
+    of every run's identity, so that results of other weights never resume into it."""
+
+    def input_hashes(self) -> dict[str, str]:
+        """:attr:`inputs`, called (empty for a method that reads no file)."""
+        return {} if self.inputs is None else dict(self.inputs())
 
     def make(self, capabilities: Capabilities | None = None, **params: Any) -> Agent:
         """A fresh agent with the registered parameters, updated by ``params``."""
@@ -178,6 +189,8 @@ def register_method(
     ablation: bool = False,
     default: bool = False,
     bound: bool = False,
+    inputs: Callable[[], dict[str, str]] | None = None,
+    missing: str = "",
     replace: bool = False,
 ) -> MethodSpec:
     """Register method ``name``: ``factory`` builds its :class:`~copi.core.Agent`.
@@ -197,7 +210,7 @@ def register_method(
     params : parameters to pass, over the factory's keyword defaults.
     capabilities : the capability preset it runs on (``faithful``, ``learnt``, ...).
     requires, available : an optional extra it needs, and whether it is installed.
-    ablation, default, bound : see :class:`MethodSpec`.
+    ablation, default, bound, inputs : see :class:`MethodSpec`.
     replace : register over an existing method of that name (otherwise refused, unless
         it is the same registration again).
 
@@ -235,7 +248,9 @@ def register_method(
         name=name, factory=factory, sensing=sensing, levels=chosen, summary=summary,
         params=merged, capabilities=capabilities, requires=requires,
         available=available or (lambda: True), ablation=ablation, default=default,
-        bound=bound,
+        bound=bound, inputs=inputs,
+        missing=missing or (f"the optional extra {requires!r}, which is not installed: pip "
+                            f"install 'copi[{requires}]'" if requires else ""),
     )  # fmt: skip
     old = _REGISTRY.current(name)
     same = old is not None and old.factory is factory and old.params == spec.params
@@ -270,10 +285,7 @@ def make_agent(name: str, capabilities: Capabilities | None = None, **params: An
     ``params``; copi's modes need their ``capabilities``."""
     spec = method_spec(name)
     if not spec.available():
-        raise InvalidArgumentError(
-            f"{name} needs the optional extra {spec.requires!r}, which is not installed: "
-            f"pip install 'copi[{spec.requires}]'"
-        )
+        raise InvalidArgumentError(f"{name} needs {spec.missing or 'an optional extra'}")
     return spec.make(capabilities, **params)
 
 
@@ -431,6 +443,31 @@ def _navground(behavior: str) -> Callable[..., Agent]:
     return make
 
 
+_RL_POLICIES = [
+    ("ppo", "ppo-mix", 0.0, "a local policy learnt by PPO (deep RL, 2M steps) on all five "
+     "families, under the level's global direction; nothing hand-written"),
+    ("ppo-guard", "ppo-mix", 1.05, "ppo shielded by compass-guard's hand-written guard"),
+    *[(f"ppo-{f}", f"ppo-{f}", 0.0, f"PPO trained on the {f} family only")
+      for f in ("star", "polygon", "indoor", "maps", "crowd")],
+    ("ppo-chauffeur", "ppo-chauffeur", 0.0, "PPO trained as the evader of the homicidal "
+     "chauffeur (Experiment 2), under the game's direction"),
+]  # fmt: skip
+
+
+def _weights_present(weights: str) -> Callable[[], bool]:
+    return lambda: packaged_policy(weights).is_file()
+
+
+def _weights_hash(weights: str) -> Callable[[], dict[str, str]]:
+    def sha() -> dict[str, str]:
+        from copi.experiments._runs import file_sha
+
+        path = packaged_policy(weights)
+        return {"weights_sha": file_sha(path)} if path.is_file() else {}
+
+    return sha
+
+
 def _register_builtins() -> None:
     # Every parameter below equals its class's default: tuned by benchmarks/tune.py
     # (validation seed 1, all five families, 40 episodes each, four settings per method;
@@ -481,10 +518,19 @@ def _register_builtins() -> None:
     reg("replan", Replan, sensing="oracle", default=True,
         summary="shortest path on the current snapshot, obstacles inflated, re-planned "
         "(hand-written; sees every obstacle)")
+    # Learnt by deep RL on copi's episodes (copi rl train; the weights ship in
+    # copi/data/rl with the commands that trained them). A policy absent is left out.
+    for name, weights, guard, summary in _RL_POLICIES:
+        reg(name, PPOAgent, default=name in ("ppo", "ppo-guard"), requires="rl-weights",
+            available=_weights_present(weights), inputs=_weights_hash(weights),
+            params={"weights": weights, "guard": guard}, summary=summary,
+            missing=f"its trained weights {weights}.npz, which copi does not ship here: train "
+            f"them with copi rl train -o {weights}.npz (docs: copi against deep RL)")
     margins = {"navground-hrvo": 0.6, "navground-hl": 0.3, "navground-orca": 0.3}
     for name, behavior in NAVGROUND_BEHAVIORS.items():
         reg(name, _navground(behavior), sensing="oracle", requires="peers",
             available=navground_available, default=name != "navground-orca",
+            missing="navground, which is not installed: pip install 'copi[peers]'",
             params={"safety_margin": margins[name]},
             summary=f"navground's {behavior} (sees obstacle positions and velocities)")
     # fmt: skip

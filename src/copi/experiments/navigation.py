@@ -391,11 +391,13 @@ def evaluate(
     committed at once.
     """
     config = config.resolved()
+    caps = None
     if config.capabilities is not None:  # before anything is written
-        check_method_capabilities(
-            config.method, _capabilities(config.capabilities, config.capabilities_sha),
-            config.capabilities,
-        )  # fmt: skip
+        caps = _capabilities(config.capabilities, config.capabilities_sha)
+        check_method_capabilities(config.method, caps, config.capabilities)
+    # the method is built once now: a file it reads (weights) is checked before anything
+    # is written
+    make_agent(config.method, caps, **config.agent_params())
     if config.world_file is not None:
         check_world_file(config.world_file, agent_radius=config.agent_radius)
     return config.run_into(

@@ -12,14 +12,14 @@ from typing import Any
 import numpy as np
 
 from copi._rng import check_seed
-from copi.core import Observation, Task
+from copi.core import Agent, Observation, Task
 from copi.errors import InvalidArgumentError
 from copi.experiments._runs import MAX_EPISODES, RunIdentity, check_count
 from copi.experiments.navigation import _capabilities
 from copi.games import ChauffeurParams
 from copi.games._world_game import ChauffeurGame
 from copi.geometry._arrays import positive_int
-from copi.online import ContextController, LearntAgent
+from copi.online import ContextController
 from copi.world import RangeSensor
 
 __all__ = [
@@ -34,20 +34,23 @@ __all__ = [
 
 
 EVADERS = ("capability", "learnt", "game")
-"""How the evader plays the game's direction (see :attr:`PursuitConfig.evader`)."""
+"""How the evader plays the game's direction (see :attr:`PursuitConfig.evader`); any
+registered method of level sensor may play it too, by its name."""
 
 
 @dataclass(frozen=True)
 class PursuitConfig(RunIdentity):
     """One run of Experiment 2."""
 
-    capabilities: str
-    """Capabilities file (its content hash enters the run id)."""
+    capabilities: str | None
+    """Capabilities file (its content hash enters the run id); None for an evader that
+    needs none."""
     evader: str = "capability"
     """"capability": the game's direction instantiated through the ContextController
     (walls and obstacles avoided); "learnt": instantiated through the learnt preset's
     agent (:class:`~copi.online.LearntAgent`, capabilities with safety priors); "game":
-    the game's direction as the velocity."""
+    the game's direction as the velocity; or a registered method of level sensor (e.g.
+    ``ppo``), instantiating it as a local policy under the game's direction."""
     dynamic: bool = True
     """Moving obstacles (10-15) or a stationary world."""
     games: int = 100
@@ -73,9 +76,23 @@ class PursuitConfig(RunIdentity):
 
     def __post_init__(self) -> None:
         if self.evader not in EVADERS:
-            raise InvalidArgumentError(
-                f"evader must be one of {', '.join(EVADERS)}; got {self.evader!r}"
-            )
+            from copi.experiments.methods import method_spec
+
+            try:
+                spec = method_spec(self.evader)
+            except InvalidArgumentError:
+                raise InvalidArgumentError(
+                    f"evader must be one of {', '.join(EVADERS)} or a method of level sensor; "
+                    f"got {self.evader!r}"
+                ) from None
+            if spec.sensing != "sensor":
+                raise InvalidArgumentError(f"the evader {self.evader} needs level "
+                                           f"{spec.sensing}; the game gives sensor")  # fmt: skip
+            needs = spec.capabilities is not None
+        else:
+            needs = self.evader != "game"
+        if needs and self.capabilities is None:
+            raise InvalidArgumentError(f"the {self.evader} evader needs a capabilities file")
         for name in ("games", "horizon"):
             positive_int(getattr(self, name), name)
         check_count(self.games, "games", MAX_EPISODES)
@@ -124,11 +141,15 @@ class GameRow:
     trajectory: dict[str, Any] | None = None
 
 
-def run_game(config: PursuitConfig, k: int) -> GameRow:
-    """Game k of a run; depends only on (config, k)."""
-    caps = _capabilities(config.capabilities, config.capabilities_sha)
+def run_game(config: PursuitConfig, k: int, agent: Agent | None = None) -> GameRow:
+    """Game k of a run; depends only on (config, k). ``agent``: play the evader through
+    this agent instead of the one ``config.evader`` names (e.g. a policy in training)."""
+    caps = _capabilities(config.capabilities, config.capabilities_sha) if config.capabilities \
+        else None  # fmt: skip
     params = config.params()
-    sensor = RangeSensor(caps.n_rays, float(caps.params.get("max_range", 10.0)))
+    n_rays = caps.n_rays if caps is not None else 32
+    reach = float(caps.params.get("max_range", 10.0)) if caps is not None else 10.0
+    sensor = RangeSensor(n_rays, reach)
     game = ChauffeurGame.draw(
         config.seed,
         k,
@@ -137,19 +158,24 @@ def run_game(config: PursuitConfig, k: int) -> GameRow:
         sensor=sensor,
         record=k < config.record,
     )
-    controller = (
-        ContextController(caps, guard=config.guard) if config.evader == "capability" else None
-    )
-    learnt = _learnt_evader(caps, config, sensor) if config.evader == "learnt" else None
+    controller = None
+    if agent is None and config.evader == "capability":
+        assert caps is not None
+        controller = ContextController(caps, guard=config.guard)
+    elif agent is None and config.evader != "game":
+        agent = _evader_agent(caps, config, sensor)
+    elif agent is not None:
+        agent.reset(Task(sensing="map", agent_radius=0.3, goal_tolerance=0.0,
+                         n_rays=sensor.n_rays, max_range=sensor.max_range))  # fmt: skip
     while game.t < config.horizon and not game.captured:
         wish = game.evader_wish()
         static = sensor.scan(game.world, game.sim.position) if config.guard > 0 else None
-        if learnt is not None:
+        if agent is not None:
             # The game's direction as a far goal (no slowing down for a near one).
             norm = float(np.hypot(*wish))
             far = np.asarray(wish, dtype=np.float64) * (1e3 / norm) if norm > 0 else wish
             obs = Observation(ranges=game.sim.ranges.copy(), goal=far, static=static)
-            velocity = learnt.act(obs)
+            velocity = agent.act(obs)
         elif controller is None:
             velocity = wish
         else:
@@ -236,14 +262,16 @@ def resolve_evader(
     return kind, float(base if guard is None else guard)
 
 
-def _learnt_evader(caps: Any, config: PursuitConfig, sensor: RangeSensor) -> LearntAgent:
-    """The learnt preset's agent with its registered parameters and this run's guard,
-    told a task with no map (it is handed the static reading each step, as the
-    capability evader is)."""
-    from copi.experiments.methods import make_agent
+def _evader_agent(caps: Any, config: PursuitConfig, sensor: RangeSensor) -> Agent:
+    """The evader's method (``learnt``: copi-learnt) with its registered parameters and,
+    where it has a guard, this run's, told a task with no map (it is handed the static
+    reading each step, as the capability evader is)."""
+    from copi.experiments.methods import make_agent, method_spec
 
-    agent = make_agent("copi-learnt", caps, guard=config.guard)
-    assert isinstance(agent, LearntAgent)
+    name = "copi-learnt" if config.evader == "learnt" else config.evader
+    spec = method_spec(name)
+    extra = {"guard": config.guard} if "guard" in spec.params else {}
+    agent = make_agent(name, caps if spec.capabilities else None, **extra)
     agent.reset(Task(sensing="map", agent_radius=0.3, goal_tolerance=0.0,
                      n_rays=sensor.n_rays, max_range=sensor.max_range))  # fmt: skip
     return agent

@@ -21,7 +21,7 @@ from copi.learning._policies import (
     compass,
     local_world,
 )
-from copi.learning._skeleton import Landmarks, skeletonize
+from copi.learning._skeleton import Landmarks, bootstrap_landmarks, skeletonize
 from copi.learning._symmetry import (
     Operator,
     PermutationAutomaton,
@@ -47,6 +47,7 @@ __all__ = [
     "Reduction",
     "SymmetryGroup",
     "ValueIterationLearner",
+    "bootstrap_landmarks",
     "compass",
     "explore",
     "learn",

@@ -201,6 +201,54 @@ class GrowingNeuralGas(ClusterMixin, TransformerMixin, BaseEstimator):  # type: 
         i, j = np.nonzero(np.triu(self._age[:n, :n] >= 0, k=1))
         self.edges_ = np.column_stack([i, j]).astype(np.int64)
 
+    def prune_unused(self, X: Any) -> GrowingNeuralGas:
+        """Remove the nodes no row of X is nearest to (and their edges); returns self.
+
+        Growing inserts a node halfway between the node of largest error and its worst
+        neighbour; between well-separated groups of signals such a node may never be any
+        signal's nearest, and a node that stands for no context is not a context (GNG-U,
+        Fritzke 1997, removes such units by their utility). On copi's maps of readings no
+        node is unused; on data in separate clusters the strays between them are.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> rng = np.random.default_rng(0)
+        >>> X = np.vstack([rng.normal(c, 0.05, (300, 2)) for c in (0.0, 10.0)])
+        >>> gng = GrowingNeuralGas(random_state=0).fit(X)
+        >>> bool(np.bincount(gng.prune_unused(X).predict(X), minlength=len(gng.nodes_)).min() > 0)
+        True
+        """
+        labels = self.predict(X)
+        n = self._n
+        counts = np.bincount(labels, minlength=n)
+        keep = counts > 0
+        if keep.all():
+            return self
+        if keep.sum() < 2:  # a network keeps two nodes at least
+            keep[np.argsort(-counts, kind="stable")[:2]] = True
+        idx = np.flatnonzero(keep)
+        remap = np.full(n, -1, dtype=np.int64)
+        remap[idx] = np.arange(len(idx))
+        cap = self._w.shape[0]
+        w = np.zeros_like(self._w)
+        w[: len(idx)] = self._w[idx]
+        err = np.zeros_like(self._err)
+        err[: len(idx)] = self._err[idx]
+        age = np.full((cap, cap), -1, dtype=np.int32)
+        age[: len(idx), : len(idx)] = self._age[np.ix_(idx, idx)]
+        nbr = np.zeros((cap, cap), dtype=np.int32)
+        deg = np.zeros(cap, dtype=np.int32)
+        for new, old in enumerate(idx):
+            kept = [int(remap[j]) for j in self._nbr[old, : self._deg[old]] if keep[j]]
+            nbr[new, : len(kept)] = kept
+            deg[new] = len(kept)
+        self._w, self._err, self._age, self._nbr, self._deg = w, err, age, nbr, deg
+        self._n = len(idx)
+        self._publish()
+        self.labels_ = self.predict(X)
+        return self
+
     # -- using the network ---------------------------------------------------------
 
     def predict(self, X: Any) -> NDArray[np.int64]:

@@ -24,7 +24,7 @@ from copi.learning._explore import explore
 from copi.learning._gng import GrowingNeuralGas
 from copi.learning._policies import ActionPriors, AStarLearner, ValueIterationLearner, compass
 from copi.learning._safety import learn_safety, probe_states
-from copi.learning._skeleton import skeletonize
+from copi.learning._skeleton import bootstrap_landmarks, skeletonize
 from copi.learning._symmetry import SymmetryGroup, reduce_landmarks, ring_operators
 from copi.world import RangeSensor, check_family
 
@@ -42,7 +42,11 @@ class LearnParams:
     steps: int = 300
     """Random-walk steps in each world (paper: 300)."""
     seed: int = 0
-    """World k of the exploration draws from default_rng([seed, k]); the map from seed."""
+    """World k of the exploration draws from default_rng([seed, k]); the map from seed
+    (unless ``map_seed`` says otherwise)."""
+    map_seed: int | None = None
+    """Seed of the context map and of its bootstrap (None: ``seed``), to vary the map on
+    the same readings."""
     workers: int = 1
     """Processes exploring worlds in parallel (results do not depend on it)."""
     n_rays: int = 32
@@ -56,9 +60,14 @@ class LearnParams:
     epochs: int = 2
     """Passes of the GNG over the readings (2 x 30,000 = the paper's ~600 nodes)."""
     landmarks: int | None = None
-    """Force this many landmarks instead of the H(k) knee (the paper found 9)."""
+    """Force this many landmarks instead of the rule's choice (the paper found 9)."""
     skeleton_method: str = "knee"
-    """How k is chosen on H(k): "knee" or "curvature" (see copi.learning.skeletonize)."""
+    """How k is chosen on H(k): "knee", "curvature", "lmethod", ... (see
+    copi.learning.skeletonize)."""
+    skeleton_bootstrap: int = 32
+    """Maps of bootstrap resamples of the readings whose median choice gives the number of
+    landmarks (copi.learning.bootstrap_landmarks); 0: the map's own H(k) alone (copi
+    0.2's rule, whose count moved with the seed from 23 to 95)."""
     symmetry_tol: float | None = None
     """Largest difference on any ray (agent steps) with which a landmark still maps onto a
     template (the tolerance of the paper's automaton, §II-C); None: derived from the
@@ -92,6 +101,15 @@ class LearnParams:
                      "probe_steps", "probe_horizon"):  # fmt: skip
             positive_int(getattr(self, name), name)
         check_family(self.family)
+        if int(self.skeleton_bootstrap) != self.skeleton_bootstrap or self.skeleton_bootstrap < 0:
+            raise InvalidArgumentError(
+                f"skeleton_bootstrap must be an int >= 0; got {self.skeleton_bootstrap!r}"
+            )
+        if self.map_seed is not None and (
+            isinstance(self.map_seed, bool) or int(self.map_seed) != self.map_seed
+            or self.map_seed < 0
+        ):  # fmt: skip
+            raise InvalidArgumentError(f"map_seed must be an int >= 0; got {self.map_seed!r}")
         for name in ("safety", "motion"):
             if not isinstance(getattr(self, name), bool):
                 raise InvalidArgumentError(
@@ -155,7 +173,9 @@ def learn(params: LearnParams | None = None, *, progress: Progress | None = None
         )
     t0 = time.perf_counter()
     report("context map", 0, 1)
-    gng = GrowingNeuralGas(p.max_nodes, epochs=p.epochs, random_state=p.seed).fit(contexts)
+    map_seed = p.seed if p.map_seed is None else p.map_seed
+    gng = GrowingNeuralGas(p.max_nodes, epochs=p.epochs, random_state=map_seed).fit(contexts)
+    gng.prune_unused(contexts)  # nodes that stand for no context (none on maps of readings)
     to_nodes = gng.transform(contexts)
     nearest = to_nodes.argmin(1)
     dist = to_nodes[np.arange(len(nearest)), nearest]
@@ -177,16 +197,22 @@ def learn(params: LearnParams | None = None, *, progress: Progress | None = None
 
     t0 = time.perf_counter()
     report("skeleton", 0, 1)
-    lm = skeletonize(gng, method=p.skeleton_method, n_landmarks=p.landmarks)
+    wanted, counts = p.landmarks, None
+    if wanted is None and p.skeleton_bootstrap > 0:
+        wanted, counts = bootstrap_landmarks(
+            contexts, resamples=p.skeleton_bootstrap, method=p.skeleton_method, seed=map_seed,
+            max_nodes=p.max_nodes, epochs=p.epochs, workers=p.workers,
+            progress=lambda k, n: report("skeleton (bootstrap)", k, n),
+        )  # fmt: skip
+        wanted = int(min(max(wanted, 1), len(gng.nodes_)))
+    lm = skeletonize(gng, method=p.skeleton_method, n_landmarks=wanted)
     report("skeleton", 1, 1)
-    stages.append(
-        {
-            "stage": "skeleton",
-            "landmarks": lm.n_landmarks,
-            "k": lm.k,
-            "seconds": time.perf_counter() - t0,
-        }
-    )
+    stage: dict[str, Any] = {"stage": "skeleton", "landmarks": lm.n_landmarks, "k": lm.k}
+    if counts is not None:
+        stage["bootstrap_median"] = int(np.round(np.median(counts)))
+        stage["bootstrap_range"] = [int(min(counts)), int(max(counts))]
+    stage["seconds"] = time.perf_counter() - t0
+    stages.append(stage)
 
     t0 = time.perf_counter()
     group = SymmetryGroup.generate(

@@ -1,0 +1,94 @@
+"""Train every PPO policy copi reports, two at a time (one per core), resumably.
+
+    python benchmarks/rl_train_all.py --steps 2000000 --seeds 0,1,2 --out results/rl
+
+Configurations: ``mix`` (all five families), one per family (in-family), and
+``chauffeur`` (the game's evader), each over the seeds given, with the settings chosen on
+validation episodes (``--tune`` runs that choice: four settings on the mix, one seed).
+Each run is ``copi rl train`` with checkpoints, so an interrupted script resumes. The
+seed-0 policies are then copied into ``src/copi/data/rl`` by ``--install``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shutil
+import subprocess
+import sys
+import time
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+FAMILIES = ("star", "polygon", "indoor", "maps", "crowd")
+CONFIGS: dict[str, list[str]] = {
+    "mix": ["--families", ",".join(FAMILIES)],
+    **{f: ["--families", f] for f in FAMILIES},
+    "chauffeur": ["--task", "chauffeur"],
+}
+TUNING = {
+    "default": [],
+    "lr1e-3": ["--lr", "1e-3"],
+    "wide": ["--net", "128,128"],
+    "entropy": ["--ent", "0.01"],
+}
+"""The settings tried on the mix (validation seed 1 measures every learning curve)."""
+SHIPPED = Path(__file__).resolve().parents[1] / "src" / "copi" / "data" / "rl"
+
+
+def _run(name: str, args: list[str], out: Path, steps: int) -> dict:
+    out.mkdir(parents=True, exist_ok=True)
+    policy = out / f"{name}.npz"
+    if policy.is_file() and (out / f"{name}.json").is_file():
+        return json.loads((out / f"{name}.json").read_text())
+    cmd = [sys.executable, "-m", "copi.cli.main", "rl", "train", "-o", str(policy), "--steps",
+           str(steps), "--checkpoints", str(out / f"{name}.ckpt"), *args]  # fmt: skip
+    t0 = time.perf_counter()
+    done = subprocess.run(cmd, capture_output=True, text=True)
+    if done.returncode != 0:
+        raise SystemExit(f"{name}: {done.stderr.strip().splitlines()[-1:]}")
+    print(f"{name}: {time.perf_counter() - t0:.0f} s; {done.stdout.strip()}", flush=True)
+    return json.loads((out / f"{name}.json").read_text())
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--steps", type=int, default=2_000_000)
+    ap.add_argument("--seeds", default="0,1,2")
+    ap.add_argument("--out", default="results/rl")
+    ap.add_argument("--only", default=None, help="comma-separated configurations")
+    ap.add_argument("--tune", action="store_true", help="the four settings on the mix, seed 0")
+    ap.add_argument("--setting", default="default", help="the setting of every run")
+    ap.add_argument("--install", action="store_true", help="ship the seed-0 policies")
+    ap.add_argument("--parallel", type=int, default=2)
+    a = ap.parse_args()
+    out = Path(a.out)
+    jobs: list[tuple[str, list[str]]] = []
+    if a.tune:
+        jobs = [(f"tune-{k}", [*CONFIGS["mix"], *v, "--seed", "0"]) for k, v in TUNING.items()]
+    else:
+        names = a.only.split(",") if a.only else list(CONFIGS)
+        for seed in a.seeds.split(","):
+            for name in names:
+                jobs.append((f"ppo-{name}-s{seed}",
+                             [*CONFIGS[name], *TUNING[a.setting], "--seed", seed]))  # fmt: skip
+    with ThreadPoolExecutor(a.parallel) as pool:
+        results = dict(zip([n for n, _ in jobs],
+                           pool.map(lambda j: _run(j[0], j[1], out, a.steps), jobs),
+                           strict=True))  # fmt: skip
+    for name, r in results.items():
+        last = r["curve"][-1]
+        print(f"{name}: {r['steps']:,} steps, {r['seconds']:.0f} s ({r['steps_per_second']:,.0f}"
+              f"/s), validation success {100 * last['success']:.1f} %")
+    if a.install:
+        SHIPPED.mkdir(parents=True, exist_ok=True)
+        for name in CONFIGS:
+            src = out / f"ppo-{name}-s0.npz"
+            if src.is_file():
+                shutil.copy(src, SHIPPED / f"ppo-{name}.npz")
+                shutil.copy(out / f"ppo-{name}-s0.json", SHIPPED / f"ppo-{name}.json")
+        print(f"installed into {SHIPPED}")
+
+
+if __name__ == "__main__":
+    main()

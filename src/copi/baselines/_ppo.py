@@ -1,0 +1,340 @@
+"""A local policy learnt by deep RL (PPO), run in numpy: the learning peer of copi.
+
+The policy lives in copi's own factorisation: the global strategy (the route at ``map``,
+the goal at ``sensor``, as every method at the level gets it) gives a direction, and the
+learnt local policy turns the reading and that direction into a velocity. What it sees
+(:func:`features`, the contract training and inference share):
+
+==============  ====  ================================================================
+block           size  value
+==============  ====  ================================================================
+ranges          N     the reading over the sensor's range, in [0, 1]
+change          N     the reading's change since the last step, clipped to +-1.5 and
+                      over 1.5, in [-1, 1] (0 on the first step)
+direction       2     the global direction, a unit vector
+reach           1     the distance to the point aimed at, over the range, clipped to 1
+==============  ====  ================================================================
+
+Its action is the network's mean output, clipped to [-1, 1] per component and to norm 1.
+Training (``copi rl train``, the optional extra ``rl``: Stable-Baselines3 on torch)
+exports the actor's weights to an ``.npz`` of plain arrays (:func:`save_policy`), read
+here without torch and without pickle (:func:`load_policy`, validated as capabilities
+are). ``ppo-guard`` adds compass-guard's hand-written guard as a shield: the 16 compass
+moves are offered, and the guard picks the safe one nearest the policy's velocity.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+from copi._files import write_npz
+from copi._npz import read_metadata, read_npz
+from copi.baselines._common import Steered
+from copi.core import Observation, Task
+from copi.errors import CopiError, InvalidArgumentError
+from copi.online import _kernels
+
+__all__ = [
+    "OBSERVATION",
+    "PPOAgent",
+    "PolicyFormatError",
+    "PolicyWeights",
+    "features",
+    "load_policy",
+    "packaged_policy",
+    "save_policy",
+]
+
+FORMAT = "copi-policy"
+FORMAT_VERSION = 1
+OBSERVATION = "copi-local-v1"
+"""The observation layout above (ranges, change, direction, reach)."""
+CHANGE_CLIP = 1.5
+"""Largest change of a ray in one step the observation keeps (as contexts that see
+motion clip it)."""
+MAX_LAYERS = 8
+MAX_WIDTH = 1024
+MAX_WEIGHT = 1e4
+"""Largest absolute weight a file may hold (trained weights stay within tens)."""
+POLICIES = Path(__file__).resolve().parents[1] / "data" / "rl"
+"""The trained policies copi ships (their training commands in the README beside them)."""
+
+
+class PolicyFormatError(CopiError):
+    """A policy file is missing, truncated, foreign, of another observation, or tampered."""
+
+
+def observation_size(n_rays: int) -> int:
+    return 2 * n_rays + 3
+
+
+def features(
+    ranges: Any,
+    previous: Any,
+    direction: Any,
+    reach: float,
+    max_range: float,
+    out: NDArray[np.float64] | None = None,
+) -> NDArray[np.float64]:
+    """The policy's observation (see the module), shape (2 N + 3,).
+
+    Examples
+    --------
+    >>> f = features(np.full(4, 5.0), np.full(4, 6.0), [3.0, 4.0], 20.0, 10.0)
+    >>> f.round(2).tolist()
+    [0.5, 0.5, 0.5, 0.5, -0.67, -0.67, -0.67, -0.67, 0.6, 0.8, 1.0]
+    """
+    r = np.asarray(ranges, dtype=np.float64)
+    n = r.shape[0]
+    x = np.empty(2 * n + 3) if out is None else out
+    x[:n] = r / max_range
+    if previous is None:
+        x[n : 2 * n] = 0.0
+    else:
+        x[n : 2 * n] = np.clip(r - np.asarray(previous, dtype=np.float64), -CHANGE_CLIP,
+                               CHANGE_CLIP) / CHANGE_CLIP  # fmt: skip
+    dx, dy = float(direction[0]), float(direction[1])
+    norm = math.hypot(dx, dy)
+    x[2 * n] = dx / norm if norm > 0 else 0.0
+    x[2 * n + 1] = dy / norm if norm > 0 else 0.0
+    x[2 * n + 2] = min(1.0, max(0.0, float(reach)) / max_range)
+    return x
+
+
+@dataclass(frozen=True, eq=False)
+class PolicyWeights:
+    """An actor network: ``len(layers)`` dense layers, tanh between them (none after the
+    last), from the observation to the mean velocity."""
+
+    layers: tuple[tuple[NDArray[np.float64], NDArray[np.float64]], ...]
+    """(W of shape (out, in), b of shape (out,)) per layer."""
+    n_rays: int = 32
+    max_range: float = 10.0
+    info: dict[str, Any] = field(default_factory=dict)
+    """How it was trained (JSON-able): algorithm, families, levels, steps, seed, command."""
+
+    def __post_init__(self) -> None:
+        _check_layers(self.layers, self.n_rays, "the policy")
+        flat = np.concatenate([np.r_[w.ravel(), b] for w, b in self.layers])
+        shapes = np.array([w.shape for w, _ in self.layers], dtype=np.int64)
+        object.__setattr__(self, "_flat", np.ascontiguousarray(flat, dtype=np.float64))
+        object.__setattr__(self, "_shapes", shapes)
+        width = int(max(w.shape[0] for w, _ in self.layers))
+        object.__setattr__(self, "_width", width)
+
+    def act(self, x: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The velocity for one observation (mean action, clipped to [-1, 1] and norm 1)."""
+        out = np.empty(2)
+        buf = np.empty((2, max(self._width, x.shape[0])))  # type: ignore[attr-defined]
+        _forward(self._flat, self._shapes, np.ascontiguousarray(x, dtype=np.float64), buf,  # type: ignore[attr-defined]
+                 out)  # fmt: skip
+        return out
+
+    def act_batch(self, x: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Velocities for observations (B, 2 N + 3) at once, shape (B, 2)."""
+        h = np.asarray(x, dtype=np.float64)
+        for i, (w, b) in enumerate(self.layers):
+            h = h @ w.T + b
+            if i < len(self.layers) - 1:
+                np.tanh(h, out=h)
+        np.clip(h, -1.0, 1.0, out=h)
+        norm = np.hypot(h[:, 0], h[:, 1])
+        big = norm > 1.0
+        h[big] /= norm[big, None]
+        return h
+
+
+@numba.njit(cache=True, fastmath=False)
+def _forward(flat, shapes, x, buf, out):  # type: ignore[no-untyped-def]
+    """The actor's forward pass over packed layers (numba: a Python loop of numpy calls
+    costs ~2 us a layer, over the 10 us a decision may take)."""
+    m = x.shape[0]
+    for j in range(m):
+        buf[0, j] = x[j]
+    cur = 0
+    off = 0
+    nl = shapes.shape[0]
+    for li in range(nl):
+        rows = shapes[li, 0]
+        cols = shapes[li, 1]
+        nxt = 1 - cur
+        for i in range(rows):
+            s = flat[off + rows * cols + i]
+            base = off + i * cols
+            for j in range(cols):
+                s += flat[base + j] * buf[cur, j]
+            buf[nxt, i] = math.tanh(s) if li < nl - 1 else s
+        off += rows * cols + rows
+        cur = nxt
+    vx = min(1.0, max(-1.0, buf[cur, 0]))
+    vy = min(1.0, max(-1.0, buf[cur, 1]))
+    n = math.hypot(vx, vy)
+    if n > 1.0:
+        vx /= n
+        vy /= n
+    out[0] = vx
+    out[1] = vy
+
+
+def _check_layers(layers: Any, n_rays: int, where: str) -> None:
+    if not isinstance(layers, tuple) or not 2 <= len(layers) <= MAX_LAYERS:
+        got = len(layers) if isinstance(layers, tuple) else type(layers).__name__
+        raise InvalidArgumentError(f"{where} must have 2 .. {MAX_LAYERS} layers; got {got}")
+    width = observation_size(n_rays)
+    for i, (w, b) in enumerate(layers):
+        if w.ndim != 2 or b.shape != (w.shape[0],):
+            raise InvalidArgumentError(
+                f"{where}: layer {i} has weights {w.shape} and biases {b.shape}; expected "
+                "(out, in) and (out,)"
+            )
+        if w.shape[1] != width:
+            what = f"the observation's {width} values ({OBSERVATION}, {n_rays} rays)" if i == 0 \
+                else f"layer {i - 1}'s {width} outputs"  # fmt: skip
+            raise InvalidArgumentError(
+                f"{where}: layer {i} takes {w.shape[1]} inputs; expected {what}"
+            )
+        if not 1 <= w.shape[0] <= MAX_WIDTH:
+            raise InvalidArgumentError(f"{where}: layer {i} has {w.shape[0]} units; at most "
+                                       f"{MAX_WIDTH}")  # fmt: skip
+        for arr in (w, b):
+            if not (np.isfinite(arr).all() and (np.abs(arr) <= MAX_WEIGHT).all()):
+                raise InvalidArgumentError(
+                    f"{where}: layer {i} holds weights that are not finite or beyond "
+                    f"+-{MAX_WEIGHT:g}, which no training yields"
+                )
+        width = w.shape[0]
+    if width != 2:
+        raise InvalidArgumentError(f"{where}: the last layer gives {width} values; a velocity is 2")
+
+
+def save_policy(policy: PolicyWeights, path: str | os.PathLike[str]) -> Path:
+    """Write ``policy`` to ``path`` (``.npz``, no pickle), atomically."""
+    arrays: dict[str, Any] = {}
+    for i, (w, b) in enumerate(policy.layers):
+        arrays[f"w{i}"] = w
+        arrays[f"b{i}"] = b
+    meta = {"format": FORMAT, "version": FORMAT_VERSION, "observation": OBSERVATION,
+            "layers": len(policy.layers), "n_rays": policy.n_rays,
+            "max_range": policy.max_range, "activation": "tanh", "info": policy.info}  # fmt: skip
+    arrays["metadata"] = np.array(json.dumps(meta, sort_keys=True))
+    return write_npz(path, arrays)
+
+
+def load_policy(path: str | os.PathLike[str]) -> PolicyWeights:
+    """Read a policy written by :func:`save_policy`; every other file is refused in one
+    line (:class:`PolicyFormatError`) saying what is wrong."""
+    p = Path(path)
+    members = [f"{k}{i}" for i in range(MAX_LAYERS) for k in "wb"] + ["metadata"]
+    a = read_npz(p, members, error=PolicyFormatError, what="policy file",
+                 max_member=MAX_WIDTH * MAX_WIDTH * 8 + 4096, max_total=1 << 28)  # fmt: skip
+    meta = read_metadata(a, p, fmt=FORMAT, version=FORMAT_VERSION, error=PolicyFormatError,
+                         what="policy file")  # fmt: skip
+    if meta.get("observation") != OBSERVATION:
+        raise PolicyFormatError(
+            f"{p}: a policy of observation {meta.get('observation')!r}; this copi feeds "
+            f"{OBSERVATION!r}"
+        )
+    n_layers, n_rays, reach = meta.get("layers"), meta.get("n_rays"), meta.get("max_range")
+    if not (isinstance(n_layers, int) and 2 <= n_layers <= MAX_LAYERS):
+        raise PolicyFormatError(f"{p}: metadata 'layers' must be an int in 2 .. {MAX_LAYERS}")
+    if not (isinstance(n_rays, int) and 4 <= n_rays <= 1024):
+        raise PolicyFormatError(f"{p}: metadata 'n_rays' must be an int in 4 .. 1024")
+    if not (isinstance(reach, int | float) and 0 < reach <= 1000):
+        raise PolicyFormatError(f"{p}: metadata 'max_range' must be a number in (0, 1000]")
+    if meta.get("activation") != "tanh":
+        raise PolicyFormatError(f"{p}: activation {meta.get('activation')!r}; copi runs tanh")
+    layers = []
+    for i in range(n_layers):
+        if f"w{i}" not in a or f"b{i}" not in a:
+            raise PolicyFormatError(f"{p}: layer {i} of {n_layers} is missing")
+        w, b = a[f"w{i}"], a[f"b{i}"]
+        if w.dtype.kind != "f" or b.dtype.kind != "f":
+            raise PolicyFormatError(f"{p}: layer {i} is not floating-point numbers")
+        layers.append((w.astype(np.float64), b.astype(np.float64)))
+    info = meta.get("info", {})
+    try:
+        return PolicyWeights(tuple(layers), int(n_rays), float(reach),
+                             info if isinstance(info, dict) else {})  # fmt: skip
+    except InvalidArgumentError as exc:
+        raise PolicyFormatError(f"{p}: {exc}") from None
+
+
+def packaged_policy(name: str) -> Path:
+    """The file of a policy copi ships (``ppo-mix``, ``ppo-star``, ...), or ``name`` itself
+    when it is a path."""
+    if name.endswith(".npz") or os.sep in name:
+        return Path(name)
+    return POLICIES / f"{name}.npz"
+
+
+class PPOAgent(Steered):
+    """A PPO policy as a local method (level ``sensor``): the global direction of its
+    level from :class:`~copi.online.Steering`, then the learnt network. Nothing
+    hand-written but, with ``guard > 0``, compass-guard's guard as a shield.
+
+    Parameters
+    ----------
+    weights : str
+        A policy copi ships (``ppo-mix``: trained on all five families) or a file.
+    guard : float
+        The shield's reach (0: none; ``ppo-guard``: compass-guard's 1.05).
+    policy : PolicyWeights, optional
+        A policy in memory instead (e.g. one being trained).
+    """
+
+    name = "ppo"
+    sensing = "sensor"
+
+    def __init__(
+        self, *, weights: str = "ppo-mix", guard: float = 0.0, policy: PolicyWeights | None = None
+    ) -> None:
+        if not (math.isfinite(guard) and guard >= 0):
+            raise InvalidArgumentError(f"guard must be a finite number >= 0; got {guard!r}")
+        self.weights = weights
+        self.guard = float(guard)
+        self.policy = policy if policy is not None else load_policy(packaged_policy(weights))
+        a = 2 * np.pi * np.arange(16) / 16
+        self._cand = np.ascontiguousarray(np.column_stack([np.cos(a), np.sin(a)])[None])
+        self._ok = np.ones((1, 16), dtype=np.bool_)
+        self._out = np.empty(5)
+        self._x = np.empty(observation_size(self.policy.n_rays))
+
+    def reset(self, task: Task) -> None:
+        super().reset(task)
+        if task.n_rays != self.policy.n_rays:
+            raise InvalidArgumentError(
+                f"the policy was trained for {self.policy.n_rays} rays; the sensor has "
+                f"{task.n_rays}"
+            )
+        self._prev: NDArray[np.float64] | None = None
+        self._node = np.zeros((1, task.n_rays))
+        self._no_static = np.full(task.n_rays, np.inf)
+
+    def steer(
+        self, obs: Observation, desired: NDArray[np.float64], reach: float
+    ) -> NDArray[np.float64]:
+        x = features(obs.ranges, self._prev, desired, reach, self.policy.max_range, self._x)
+        self._prev = np.array(obs.ranges, dtype=np.float64)
+        v = self.policy.act(x)
+        if self.guard <= 0:
+            return v
+        static = self._no_static if obs.static is None else obs.static
+        speed = math.hypot(v[0], v[1])
+        if speed < 1e-9:
+            return v
+        out = self._out
+        _kernels.decide(
+            np.asarray(obs.ranges, dtype=np.float64), static, self._node, self._cand, self._ok,
+            v[0], v[1], max(reach, 1.0) * speed, self.guard, self.cos, self.sin,
+            self.max_range, out,
+        )  # fmt: skip
+        return out[:2].copy()

@@ -1,0 +1,20 @@
+"""Deep RL as copi's learning peer: PPO (Stable-Baselines3) trained for a local policy in
+copi's own factorisation, exported to numpy weights that copi runs without torch
+(:class:`copi.baselines.PPOAgent`). Training needs the optional extra ``rl``; running a
+trained policy does not."""
+
+from __future__ import annotations
+
+from copi.rl._env import TRAINING_SEED, LocalPolicyEnv, Reward
+from copi.rl._train import VALIDATION_SEED, RLMissingError, TrainConfig, rl_available, train
+
+__all__ = [
+    "LocalPolicyEnv",
+    "RLMissingError",
+    "Reward",
+    "TRAINING_SEED",
+    "TrainConfig",
+    "VALIDATION_SEED",
+    "rl_available",
+    "train",
+]

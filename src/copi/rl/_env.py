@@ -1,0 +1,197 @@
+"""The environment PPO learns its local policy in: copi's episodes, copi's factorisation.
+
+An episode is one of copi's navigation episodes (a family's world, task and moving
+obstacles, drawn from a training seed no report uses), run at a sensing level; the
+global strategy of that level (:class:`~copi.online.Steering`: the route at ``map``, the
+goal at ``sensor``) gives the direction, and the agent sees exactly what
+:class:`~copi.baselines.PPOAgent` will see (:func:`~copi.baselines.policy_features`).
+Episodes of the homicidal chauffeur (``task="chauffeur"``) take the game's direction for
+the evader instead, and end at capture.
+
+Reward, shaped as the field does (progress along the global direction, a contact
+penalty, a success bonus), with :class:`Reward`'s weights: each step
+``progress * (moved . direction) - time``; at the goal ``+ success``; at a contact
+``- contact`` (the episode ends). In the chauffeur game each step survived earns
+``survive`` and a capture or contact costs ``contact``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import gymnasium
+import numpy as np
+from gymnasium import spaces
+from numpy.typing import NDArray
+
+from copi.baselines._ppo import features, observation_size
+from copi.core import Observation, check_sensing
+from copi.errors import InvalidArgumentError
+from copi.online import Steering
+from copi.world import check_family
+
+__all__ = ["TRAINING_SEED", "LocalPolicyEnv", "Reward"]
+
+TRAINING_SEED = 2
+"""Training episodes are episodes of this seed (reports use seed 0, tuning seed 1)."""
+
+
+@dataclass(frozen=True)
+class Reward:
+    """The shaped reward's weights (see the module)."""
+
+    progress: float = 1.0
+    time: float = 0.01
+    success: float = 10.0
+    contact: float = 10.0
+    survive: float = 0.05
+
+    def __post_init__(self) -> None:
+        for k, v in vars(self).items():
+            if not (isinstance(v, int | float) and math.isfinite(v) and 0 <= v <= 1000):
+                raise InvalidArgumentError(f"reward weight {k} must be a number in [0, 1000]; "
+                                           f"got {v!r}")  # fmt: skip
+
+
+class LocalPolicyEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
+    """copi's episodes of ``families`` at ``levels`` (drawn at random each reset from
+    ``self.np_random``), observed as a PPO policy observes them.
+
+    Parameters
+    ----------
+    families : names of world families (episodes of the training seed).
+    levels : sensing levels to draw from ("sensor", "map").
+    task : "navigation" or "chauffeur" (the evader of the homicidal chauffeur).
+    reward : Reward
+    max_steps : steps before an episode is truncated.
+    seed_of_episodes : the seed whose episodes are drawn (default :data:`TRAINING_SEED`).
+    """
+
+    metadata = {"render_modes": []}
+
+    def __init__(
+        self,
+        families: tuple[str, ...] = ("star",),
+        *,
+        levels: tuple[str, ...] = ("sensor", "map"),
+        task: str = "navigation",
+        reward: Reward | None = None,
+        max_steps: int = 500,
+        seed_of_episodes: int = TRAINING_SEED,
+    ) -> None:
+        if task not in ("navigation", "chauffeur"):
+            raise InvalidArgumentError(f"task must be navigation or chauffeur; got {task!r}")
+        if not families:
+            raise InvalidArgumentError("families must name at least one family; got none")
+        for f in families:
+            check_family(f)
+        for lv in levels:
+            check_sensing(lv)
+            if lv == "oracle":
+                raise InvalidArgumentError("a local policy runs at sensor or map, not oracle")
+        self.families = tuple(families)
+        self.levels = tuple(levels) if task == "navigation" else ("map",)
+        self.task = task
+        self.reward = reward or Reward()
+        self.max_steps = int(max_steps)
+        self.seed_of_episodes = int(seed_of_episodes)
+        n = 32
+        self.observation_space = spaces.Box(-1.0, 1.0, shape=(observation_size(n),),
+                                            dtype=np.float32)  # fmt: skip
+        self.action_space = spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
+        self.steering = Steering()
+        self._x = np.empty(observation_size(n))
+        self._prev: NDArray[np.float64] | None = None
+        self.game: Any = None
+        self.direction = np.zeros(2)
+
+    # -- episodes ---------------------------------------------------------------------
+
+    def _draw(self) -> None:
+        from copi.experiments._episode import make_task
+        from copi.experiments.navigation import draw_episode
+
+        rng = self.np_random
+        self.level = self.levels[int(rng.integers(len(self.levels)))]
+        k = int(rng.integers(1_000_000))
+        if self.task == "chauffeur":
+            from copi.games._world_game import ChauffeurGame
+
+            self.game = ChauffeurGame.draw(self.seed_of_episodes, k, dynamic=True)
+            self.sim = self.game.sim
+            return
+        family = self.families[int(rng.integers(len(self.families)))]
+        for attempt in range(20):
+            try:
+                self.sim = draw_episode(family, k + attempt, self.seed_of_episodes)
+                break
+            except Exception:  # a world with no valid task: the next one
+                continue
+        self.game = None
+        self.steering.reset(make_task(self.sim, self.level))  # type: ignore[arg-type]
+
+    def _observe(self) -> NDArray[np.float32]:
+        sim = self.sim
+        if self.game is not None:
+            wish = np.asarray(self.game.evader_wish(), dtype=np.float64)
+            self.direction, reach = wish, 1e3
+        else:
+            map_level = self.level != "sensor"
+            obs = Observation(ranges=sim.ranges, goal=sim.goal - sim.position,
+                              position=sim.position if map_level else None)  # fmt: skip
+            d, reach = self.steering.aim(obs)
+            self.direction = np.asarray(d, dtype=np.float64)
+        x = features(sim.ranges, self._prev, self.direction, reach, sim.sensor.max_range,
+                     self._x)  # fmt: skip
+        self._prev = sim.ranges.copy()
+        return x.astype(np.float32)
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[NDArray[np.float32], dict[str, Any]]:
+        super().reset(seed=seed)
+        self._prev = None
+        self._draw()
+        self.t = 0
+        return self._observe(), {}
+
+    def step(
+        self, action: NDArray[np.float32]
+    ) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
+        a = np.asarray(action, dtype=np.float64).reshape(-1)
+        if a.shape != (2,) or not np.isfinite(a).all():
+            raise InvalidArgumentError(f"action must be 2 finite numbers; got {a.tolist()}")
+        a = np.clip(a, -1.0, 1.0)
+        norm = math.hypot(a[0], a[1])
+        if norm > 1.0:
+            a /= norm
+        w = self.reward
+        before = self.sim.position.copy()
+        u = self.direction
+        un = math.hypot(u[0], u[1])
+        self.t += 1
+        info: dict[str, Any] = {}
+        if self.game is not None:
+            captured = self.game.step(a)
+            contact = self.game.contacts > 0
+            reward = w.survive
+            terminated = captured or contact
+            if terminated:
+                reward -= w.contact
+            info["is_success"] = False
+            truncated = not terminated and self.t >= self.max_steps
+            info["survived"] = truncated
+            return self._observe(), float(reward), terminated, truncated, info
+        res = self.sim.step(a)
+        moved = self.sim.position - before
+        reward = w.progress * (float(moved @ u) / un if un > 0 else 0.0) - w.time
+        terminated = bool(res.reached or res.contact)
+        if res.reached and not res.contact:
+            reward += w.success
+        if res.contact:
+            reward -= w.contact
+        info["is_success"] = bool(res.reached and not res.contact)
+        truncated = not terminated and self.t >= self.max_steps
+        return self._observe(), float(reward), terminated, truncated, info

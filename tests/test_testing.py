@@ -117,7 +117,7 @@ class _BadLevel(_East):
         (_Scribbles, "act changed the observation's ranges in place at step 1"),
         (_Counters, "counters returned values that are not numbers"),
         (_NotAnAgent, "_NotAnAgent is not a copi.core.Agent: subclass it"),
-        (_BadLevel, "sensing must be one of sensor, map, oracle; got 'telepathy'"),
+        (_BadLevel, "sensing must be one of sensor, map, oracle, future; got 'telepathy'"),
         (42, "expected an Agent, an Agent factory or a method's name; got int"),
     ],
 )

@@ -221,10 +221,11 @@ def atomic_write(
     return Path(path)
 
 
-def write_text(path: str | os.PathLike[str], text: str) -> Path:
-    """Write ``text`` (UTF-8) to ``path`` atomically."""
+def write_text(path: str | os.PathLike[str], text: str, kind: str = "text") -> Path:
+    """Write ``text`` (UTF-8) to ``path`` atomically; ``kind`` ("text" or "json") is what
+    it holds, so that a file of another kind there is refused (:func:`check_outputs`)."""
     data = text.encode("utf-8")
-    return atomic_write(path, lambda fh: fh.write(data), "text")
+    return atomic_write(path, lambda fh: fh.write(data), kind)
 
 
 def save_figure(fig: Any, path: str | os.PathLike[str], **kwargs: Any) -> Path:

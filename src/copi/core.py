@@ -16,6 +16,8 @@ map       plus the static world (and so the agent's position in it, the static r
           and the reading the static map alone would give, which tells walls apart
           from moving obstacles)
 oracle    plus every moving obstacle's position, radius and velocity
+future    plus the whole future of every moving obstacle (they ignore the agent, so
+          it is recorded before the episode): only for the clairvoyant *bound*
 ========  ==========================================================================
 
 A method declares the least level it needs (:attr:`Agent.sensing`); asking it to run
@@ -64,7 +66,7 @@ __all__ = [
     "check_strategy",
 ]
 
-Sensing = Literal["sensor", "map", "oracle"]
+Sensing = Literal["sensor", "map", "oracle", "future"]
 """A sensing level (see the module)."""
 
 SENSING_LEVELS: tuple[Sensing, ...] = get_args(Sensing)
@@ -93,7 +95,7 @@ def check_strategy(name: str) -> str:
 
 
 def check_sensing(level: str, needs: str | None = None, *, method: str = "method") -> int:
-    """The rank of ``level`` (0, 1, 2); refuses an unknown level, or one below ``needs``.
+    """The rank of ``level`` (0, 1, 2, 3); refuses an unknown level, or one below ``needs``.
 
     Examples
     --------
@@ -141,6 +143,11 @@ class Task:
     """The global strategy at level ``sensor``: "greedy" (head for the goal),
     "mapping" (map as it goes) or "causal" (map, and learn from experience which moves
     work where). Levels with a map follow the route."""
+    future: NDArray[np.float64] | None = None
+    """Level ``future`` only: ``future[t, k] = (x, y, radius)`` of moving obstacle k at
+    step t, for t = 0 .. the episode's step limit. A bound's knowledge, never a method's:
+    the obstacles' random walk draws the same numbers whatever the agent does, so the
+    future is the episode's own."""
     lifelong: bool = False
     """The agent lives on in this world: tasks follow one another, each observation's
     ``odometry`` places it in one frame for its whole life, and a method may keep what

@@ -190,7 +190,7 @@ def test_evaluate_report_and_bad_inputs(tmp_path: Path, capsys: pytest.CaptureFi
         (["--method", "astar"], "method must be one of copi-faithful, copi-extended, copi-learnt, copi-learnt-priors"),
         (
             ["--sensing", "psychic"],
-            "sensing level must be one of sensor, map, oracle; got 'psychic'",
+            "sensing level must be one of sensor, map, oracle, future; got 'psychic'",
         ),
         (
             ["--method", "replan", "--sensing", "map"],

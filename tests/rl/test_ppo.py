@@ -4,14 +4,17 @@ and bad policy files refused in one line."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
+import math
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from copi.baselines import PolicyFormatError, PolicyWeights, PPOAgent, features, load_policy
-from copi.baselines._ppo import save_policy
+from copi.baselines._ppo import direction_frame, save_policy, to_world
+from copi.errors import InvalidArgumentError
 from tests.cli.test_faults import _one_line_error, run
 
 torch = pytest.importorskip("torch", reason="the optional extra rl (make install adds it)")
@@ -35,14 +38,25 @@ def test_the_observation_is_what_the_agent_sees() -> None:
     check_env(env, skip_render_check=True)
     obs, _ = env.reset(seed=3)
     assert obs.shape == (67,) and env.observation_space.contains(obs)
-    assert np.allclose(obs[:32], env.sim.ranges / 10.0, atol=1e-6)
+    # the reading turned by the rays of the direction's angle: the direction within half
+    # a ray of the block's first ray
+    k = direction_frame(env.direction, 32)
+    assert np.allclose(obs[:32], np.roll(env.sim.ranges, -k) / 10.0, atol=1e-6)
     assert np.allclose(obs[32:64], 0.0)  # no change on the first step
     assert np.hypot(obs[64], obs[65]) == pytest.approx(1.0, abs=1e-6)
-    before, where = env.sim.ranges.copy(), env.sim.position.copy()
+    assert abs(math.atan2(obs[65], obs[64])) <= math.pi / 32 + 1e-6
+    before, where, k = env.sim.ranges.copy(), env.sim.position.copy(), k
+    # the action is of the policy's frame: clipped per component and to norm 1, then
+    # turned back by k rays, as PPOAgent turns it
     obs, reward, *_ = env.step(np.array([3.0, 4.0], dtype=np.float32))  # norm 5: clipped to 1
-    assert np.hypot(*(env.sim.position - where)) <= 1.0 + 1e-9
+    moved = env.sim.position - where
+    assert np.hypot(*moved) <= 1.0 + 1e-9
+    if np.hypot(*moved) > 0.99:  # not stopped by a wall
+        np.testing.assert_allclose(moved, to_world(np.array([1.0, 1.0]) / math.sqrt(2), k, 32),
+                                   atol=1e-9)  # fmt: skip
     change = np.clip(env.sim.ranges - before, -1.5, 1.5) / 1.5
-    assert np.allclose(obs[32:64], change, atol=1e-6)
+    assert np.allclose(obs[32:64], np.roll(change, -direction_frame(env.direction, 32)),
+                       atol=1e-6)  # fmt: skip
     with pytest.raises(ValueError, match="action must be 2 finite numbers"):
         env.step(np.array([np.nan, 0.0]))
 
@@ -83,10 +97,20 @@ def test_a_short_training_beats_a_random_policy(tmp_path: Path) -> None:
     try:
         cfg = TrainConfig(families=("empty-room",), levels=("sensor",), steps=24_000, envs=4,
                           n_steps=256, batch_size=256, net=(32, 32))  # fmt: skip
-        summary = train(cfg, tmp_path / "p.npz", validate_every=12_000, validation_episodes=10)
+        ckpt = tmp_path / "ckpt"
+        half = dataclasses.replace(cfg, steps=12_000)
+        train(half, tmp_path / "half.npz", checkpoints=ckpt, validate_every=6_000,
+              validation_episodes=10)  # fmt: skip
+        # a checkpoint of another run is refused; the same run with more steps resumes
+        with pytest.raises(InvalidArgumentError, match="another training run"):
+            train(dataclasses.replace(cfg, learning_rate=1e-3), tmp_path / "x.npz",
+                  checkpoints=ckpt)  # fmt: skip
+        summary = train(cfg, tmp_path / "p.npz", checkpoints=ckpt, validate_every=6_000,
+                        validation_episodes=10)  # fmt: skip
         assert summary["steps"] >= 24_000 and (tmp_path / "p.png").is_file()
         curve = json.loads((tmp_path / "p.json").read_text())["curve"]
         assert curve[-1]["success"] == summary["curve"][-1]["success"]
+        assert [c["steps"] for c in curve][:2] == [6_000, 12_000] and len(curve) >= 4
         from copi.experiments.navigation import draw_episode
 
         trained = PPOAgent(weights=str(tmp_path / "p.npz"))
@@ -182,7 +206,31 @@ def test_ppo_without_weights_is_left_out_or_refused(tmp_path: Path, capsys, monk
 
 
 def test_features_clip_and_normalise() -> None:
-    x = features(np.r_[np.full(31, 10.0), 0.0], np.r_[np.full(31, 0.0), 10.0], [0.0, -2.0],
+    x = features(np.r_[np.full(31, 10.0), 0.0], np.r_[np.full(31, 0.0), 10.0], [1.0, 0.0],
                  50.0, 10.0)  # fmt: skip
     assert x[0] == 1.0 and x[31] == 0.0 and x[32] == 1.0 and x[63] == -1.0
-    assert x[64:].tolist() == [0.0, -1.0, 1.0]
+    assert x[64:].tolist() == [1.0, 0.0, 1.0]
+    # pointing down (-y: ray 24 of 32): ray 24 of the sensor is the block's first
+    r = np.arange(32.0) / 4
+    y = features(r, None, [0.0, -2.0], 5.0, 10.0)
+    assert direction_frame([0.0, -2.0], 32) == 24 and y[0] == r[24] / 10 and y[8] == r[0] / 10
+    assert np.allclose(y[64:], [1.0, 0.0, 0.5])
+
+
+@pytest.mark.parametrize("angle", [0.0, 0.3, 1.7, -2.9, 3.1])
+def test_the_frame_is_a_symmetry(angle: float) -> None:
+    """Turning the world by whole rays turns the observation not at all and the action
+    with it: the policy's frame is the direction's."""
+    rng = np.random.default_rng(0)
+    r, prev = rng.uniform(0, 10, 32), rng.uniform(0, 10, 32)
+    d = np.array([math.cos(angle), math.sin(angle)])
+    for j in (1, 5, 20):
+        turned = np.array([[math.cos(2 * math.pi * j / 32), -math.sin(2 * math.pi * j / 32)],
+                           [math.sin(2 * math.pi * j / 32), math.cos(2 * math.pi * j / 32)]])
+        a = features(r, prev, d, 3.0, 10.0)
+        b = features(np.roll(r, j), np.roll(prev, j), turned @ d, 3.0, 10.0)
+        np.testing.assert_allclose(a, b, atol=1e-9)
+        v = np.array([0.3, -0.4])
+        np.testing.assert_allclose(
+            turned @ to_world(v, direction_frame(d, 32), 32),
+            to_world(v, direction_frame(turned @ d, 32), 32), atol=1e-9)

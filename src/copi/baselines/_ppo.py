@@ -2,20 +2,26 @@
 
 The policy lives in copi's own factorisation: the global strategy (the route at ``map``,
 the goal at ``sensor``, as every method at the level gets it) gives a direction, and the
-learnt local policy turns the reading and that direction into a velocity. What it sees
-(:func:`features`, the contract training and inference share):
+learnt local policy turns the reading and that direction into a velocity. It sees them,
+as copi's templates see a context (paper §II-C), in the frame of the symmetry that turns
+the direction onto the first ray: the reading is turned by the whole number of rays k
+nearest the direction's angle (:func:`direction_frame`), and its velocity is turned back
+by the same k rays (:func:`to_world`). What it sees (:func:`features`, the contract
+training and inference share):
 
 ==============  ====  ================================================================
 block           size  value
 ==============  ====  ================================================================
-ranges          N     the reading over the sensor's range, in [0, 1]
+ranges          N     the reading over the sensor's range, in [0, 1], ray i of the
+                      block being ray i + k of the sensor
 change          N     the reading's change since the last step, clipped to +-1.5 and
-                      over 1.5, in [-1, 1] (0 on the first step)
-direction       2     the global direction, a unit vector
+                      over 1.5, in [-1, 1] (0 on the first step), turned alike
+direction       2     the global direction in that frame (within half a ray of +x)
 reach           1     the distance to the point aimed at, over the range, clipped to 1
 ==============  ====  ================================================================
 
-Its action is the network's mean output, clipped to [-1, 1] per component and to norm 1.
+Its action is the network's mean output, clipped to [-1, 1] per component and to norm 1,
+turned back to the world's frame.
 Training (``copi rl train``, the optional extra ``rl``: Stable-Baselines3 on torch)
 exports the actor's weights to an ``.npz`` of plain arrays (:func:`save_policy`), read
 here without torch and without pickle (:func:`load_policy`, validated as capabilities
@@ -48,16 +54,19 @@ __all__ = [
     "PPOAgent",
     "PolicyFormatError",
     "PolicyWeights",
+    "direction_frame",
     "features",
     "load_policy",
     "packaged_policy",
     "save_policy",
+    "to_world",
 ]
 
 FORMAT = "copi-policy"
 FORMAT_VERSION = 1
-OBSERVATION = "copi-local-v1"
-"""The observation layout above (ranges, change, direction, reach)."""
+OBSERVATION = "copi-local-v2"
+"""The observation layout above (ranges, change, direction, reach, in the direction's
+frame)."""
 CHANGE_CLIP = 1.5
 """Largest change of a ray in one step the observation keeps (as contexts that see
 motion clip it)."""
@@ -77,6 +86,27 @@ def observation_size(n_rays: int) -> int:
     return 2 * n_rays + 3
 
 
+def direction_frame(direction: Any, n_rays: int) -> int:
+    """k: the whole number of rays nearest the angle of ``direction`` (0 for none).
+
+    Examples
+    --------
+    >>> direction_frame([0.0, 1.0], 32), direction_frame([-1.0, -0.01], 32)
+    (8, 16)
+    """
+    dx, dy = float(direction[0]), float(direction[1])
+    if dx == 0.0 and dy == 0.0:
+        return 0
+    return int(round(math.atan2(dy, dx) * n_rays / (2 * math.pi))) % n_rays
+
+
+def to_world(v: NDArray[np.float64], k: int, n_rays: int) -> NDArray[np.float64]:
+    """A velocity of the policy's frame (:func:`direction_frame` ``k``) in the world's."""
+    a = 2 * math.pi * k / n_rays
+    c, s = math.cos(a), math.sin(a)
+    return np.array([c * v[0] - s * v[1], s * v[0] + c * v[1]])
+
+
 def features(
     ranges: Any,
     previous: Any,
@@ -85,27 +115,37 @@ def features(
     max_range: float,
     out: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
-    """The policy's observation (see the module), shape (2 N + 3,).
+    """The policy's observation (see the module), shape (2 N + 3,), in the frame of
+    ``direction_frame(direction, N)``.
 
     Examples
     --------
-    >>> f = features(np.full(4, 5.0), np.full(4, 6.0), [3.0, 4.0], 20.0, 10.0)
-    >>> f.round(2).tolist()
-    [0.5, 0.5, 0.5, 0.5, -0.67, -0.67, -0.67, -0.67, 0.6, 0.8, 1.0]
+    >>> f = features([5.0, 6.0, 7.0, 8.0], None, [0.0, 4.0], 20.0, 10.0)
+    >>> f.round(2).tolist()   # direction along ray 1: the reading starts at ray 1
+    [0.6, 0.7, 0.8, 0.5, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0]
     """
     r = np.asarray(ranges, dtype=np.float64)
     n = r.shape[0]
     x = np.empty(2 * n + 3) if out is None else out
-    x[:n] = r / max_range
+    k = direction_frame(direction, n)
+    x[: n - k] = r[k:]
+    x[n - k : n] = r[:k]
+    x[:n] /= max_range
     if previous is None:
         x[n : 2 * n] = 0.0
     else:
-        x[n : 2 * n] = np.clip(r - np.asarray(previous, dtype=np.float64), -CHANGE_CLIP,
-                               CHANGE_CLIP) / CHANGE_CLIP  # fmt: skip
+        change = np.clip(r - np.asarray(previous, dtype=np.float64), -CHANGE_CLIP,
+                         CHANGE_CLIP) / CHANGE_CLIP  # fmt: skip
+        x[n : 2 * n - k] = change[k:]
+        x[2 * n - k : 2 * n] = change[:k]
     dx, dy = float(direction[0]), float(direction[1])
     norm = math.hypot(dx, dy)
-    x[2 * n] = dx / norm if norm > 0 else 0.0
-    x[2 * n + 1] = dy / norm if norm > 0 else 0.0
+    if norm > 0:
+        a = math.atan2(dy, dx) - 2 * math.pi * k / n
+        x[2 * n] = math.cos(a)
+        x[2 * n + 1] = math.sin(a)
+    else:
+        x[2 * n] = x[2 * n + 1] = 0.0
     x[2 * n + 2] = min(1.0, max(0.0, float(reach)) / max_range)
     return x
 
@@ -324,7 +364,8 @@ class PPOAgent(Steered):
     ) -> NDArray[np.float64]:
         x = features(obs.ranges, self._prev, desired, reach, self.policy.max_range, self._x)
         self._prev = np.array(obs.ranges, dtype=np.float64)
-        v = self.policy.act(x)
+        v = to_world(self.policy.act(x), direction_frame(desired, self.policy.n_rays),
+                     self.policy.n_rays)  # fmt: skip
         if self.guard <= 0:
             return v
         static = self._no_static if obs.static is None else obs.static

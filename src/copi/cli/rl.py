@@ -34,6 +34,8 @@ def train_command(
     envs: Annotated[int, typer.Option("--envs", min=1, max=256, help="Vectorised envs.")] = 8,
     learning_rate: Annotated[float, typer.Option("--lr", min=0.0, max=1.0)] = 3e-4,
     ent_coef: Annotated[float, typer.Option("--ent", min=0.0, max=1.0)] = 0.0,
+    log_std: Annotated[float, typer.Option("--log-std", min=-5.0, max=2.0,
+                                           help="Initial log std of the actions.")] = 0.0,
     net: Annotated[str, typer.Option("--net", help="Hidden layer widths, e.g. 64,64.")] = "64,64",
     checkpoints: Annotated[
         Path | None,
@@ -63,6 +65,7 @@ def train_command(
         families=tuple(f.strip() for f in families.split(",") if f.strip()),
         levels=tuple(lv.strip() for lv in levels.split(",") if lv.strip()), task=task,
         steps=steps, seed=seed, envs=envs, learning_rate=learning_rate, ent_coef=ent_coef,
+        log_std=log_std,
         net=widths, reward=Reward(),
     )  # fmt: skip
     output.parent.mkdir(parents=True, exist_ok=True)

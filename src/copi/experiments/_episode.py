@@ -3,6 +3,7 @@ experiment shares, and the outcome and metrics it records."""
 
 from __future__ import annotations
 
+import copy
 import math
 import time
 from dataclasses import dataclass
@@ -20,6 +21,7 @@ __all__ = [
     "EnvEpisode",
     "EpisodeOutcome",
     "make_task",
+    "obstacle_future",
     "optimal_to_goal",
     "run_episode",
     "run_in_env",
@@ -76,12 +78,39 @@ def optimal_to_goal(sim: Simulator, *, quad_segs: int = 16) -> float:
     return max(0.0, length / (1.0 + length_error_bound(quad_segs)) - sim.goal_tolerance)
 
 
+def obstacle_future(sim: Simulator, steps: int) -> NDArray[np.float64]:
+    """The moving obstacles' next ``steps`` steps from ``sim``'s present, shape
+    (steps + 1, d, 3), rows (x, y, radius): a copy of the episode run with the agent
+    standing still. The obstacles' random walk draws the same numbers whatever the
+    agent does and ignores it, so this is the future of the episode whatever the agent
+    will do (tested)."""
+    twin = copy.deepcopy(sim)
+    twin.record = False
+    d = twin.radii.shape[0]
+    out = np.empty((steps + 1, d, 3))
+    out[:, :, 2] = twin.radii
+    out[0, :, :2] = twin.centers
+    still = np.zeros(2)
+    for t in range(steps):
+        twin.step(still)
+        out[t + 1, :, :2] = twin.centers
+    return out
+
+
 def make_task(
-    sim: Simulator, sensing: Sensing, strategy: str = "greedy", *, lifelong: bool = False
+    sim: Simulator,
+    sensing: Sensing,
+    strategy: str = "greedy",
+    *,
+    lifelong: bool = False,
+    max_steps: int = 1000,
 ) -> Task:
     """The task as a method at ``sensing`` is told it (``strategy``: the global strategy
-    at level ``sensor``; ``lifelong``: one of a life's tasks, see :class:`Task`)."""
-    knows_map = check_sensing(sensing) >= 1
+    at level ``sensor``; ``lifelong``: one of a life's tasks, see :class:`Task`;
+    ``max_steps``: the episode's step limit, over which level ``future`` records the
+    obstacles' future)."""
+    rank = check_sensing(sensing)
+    knows_map = rank >= 1
     return Task(
         sensing=sensing,
         agent_radius=sim.agent_radius,
@@ -92,6 +121,7 @@ def make_task(
         start=sim.position.copy() if knows_map else None,
         goal=sim.goal.copy() if knows_map else None,
         strategy=strategy,
+        future=obstacle_future(sim, max_steps) if rank >= 3 else None,
         lifelong=lifelong,
     )
 
@@ -135,7 +165,9 @@ def run_episode(
     rank = check_sensing(sensing, agent.sensing, method=agent.name)
     world = sim.world
     sensor = sim.sensor
-    agent.reset(make_task(sim, sensing, strategy, lifelong=origin is not None))
+    agent.reset(
+        make_task(sim, sensing, strategy, lifelong=origin is not None, max_steps=max_steps)
+    )
     prev_centers = sim.centers.copy()
     velocities = sim.speed * np.column_stack([np.cos(sim.headings), np.sin(sim.headings)])
     length = 0.0

@@ -168,6 +168,14 @@ def verdict(d_success: PairedDifference, d_excess: PairedDifference) -> str:
     return "; ".join(parts)
 
 
+def _is_bound(method: str) -> bool:
+    """Whether ``method`` is a registered bound (a ceiling, not a method)."""
+    try:
+        return method_spec(method).bound
+    except CopiError:
+        return False
+
+
 def _order(arm: MethodRun, known: dict[str, int]) -> tuple[int, str, int, str]:
     return (known.get(arm.method, len(known)), arm.method, SENSING_LEVELS.index(arm.sensing),
             arm.strategy)  # fmt: skip
@@ -184,7 +192,7 @@ def _figure_success_excess(table: dict[str, dict[MethodRun, dict[str, Any]]], ou
     extra = 0 if len(families) % cols else 1.2
     fig = _figure(4.2 * cols, 3.6 * rows_n + extra + (1.4 if cols == 1 else 0))
     axes = np.atleast_1d(fig.subplots(rows_n, cols, squeeze=False)).ravel()
-    markers = {"sensor": "o", "map": "s", "oracle": "^"}
+    markers = {"sensor": "o", "map": "s", "oracle": "^", "future": "*"}
     names = sorted({a.method for t in table.values() for a in t}, key=lambda m: (
         method_names().index(m) if m in method_names() else 99, m))  # fmt: skip
     import matplotlib
@@ -197,10 +205,14 @@ def _figure_success_excess(table: dict[str, dict[MethodRun, dict[str, Any]]], ou
             if not math.isfinite(s["excess_median"]):
                 continue
             c = palette[names.index(arm.method) % len(palette)]
-            ax.scatter(100 * s["excess_median"], 100 * s["success"], marker=markers[arm.sensing],
-                       color=c, s=36,
-                       edgecolor="black" if arm.method.startswith("copi") else "none",
-                       label=arm.label, zorder=3)  # fmt: skip
+            bound = _is_bound(arm.method)
+            ax.scatter(100 * s["excess_median"], 100 * s["success"],
+                       marker=markers.get(arm.sensing, "D"), s=70 if bound else 36,
+                       facecolor="none" if bound else c,
+                       edgecolor=c if bound else (
+                           "black" if arm.method.startswith("copi") else "none"),
+                       linewidths=1.4 if bound else 1.0,
+                       label=arm.label + (" (bound)" if bound else ""), zorder=3)  # fmt: skip
         ax.set_title(_family_title(family))
         ax.set_xlabel("median excess (%)")
         ax.set_ylabel("success (%)")
@@ -212,7 +224,7 @@ def _figure_success_excess(table: dict[str, dict[MethodRun, dict[str, Any]]], ou
         for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
             seen.setdefault(lab, h)
     spare = axes[len(families)] if len(axes) > len(families) else None
-    title = "● sensor   ■ map   ▲ oracle"
+    title = "● sensor   ■ map   ▲ oracle   ★ future   (hollow: a bound, not a method)"
     if seen and spare is not None:  # the legend fills the empty panel
         spare.legend(list(seen.values()), list(seen), loc="center", ncol=2, fontsize=7,
                      frameon=False, title=title, title_fontsize=8)  # fmt: skip
@@ -301,18 +313,25 @@ def write_benchmark_report(
         "obstacles frozen (an agent may pass where a disc stood, so an excess can be slightly "
         "negative). Sensing: `sensor` = ranges + goal relative to the agent; `map` = "
         "plus the static world; `oracle` = plus obstacle positions and velocities; "
+        "`future` = plus the obstacles' whole future (the clairvoyant bound only); "
         "strategy: the global direction every method at the level follows"
         + (f" ({words} at `sensor`)" if words else "")
         + ", the static route at `map` and `oracle`.",
         "",
         f"**Reference: {reference}** ({chosen}). Δ columns: the row minus {reference} at the "
-        "same level and strategy (oracle rows: minus its `map` row) on the same episodes, in "
+        "same level and strategy (oracle and future rows: minus its `map` row) on the same "
+        "episodes, in "
         "points, with 95 % bootstrap intervals (none on fewer than "
         f"{MIN_PAIRS} pairs); Δ excess over the episodes both succeeded in. *Versus* says "
         "which differences exclude zero: more or fewer successes, shorter or longer paths "
         f"than {reference}. n: the row's episodes. Steps to goal, clearance (the least "
         "surface distance to a moving obstacle over an episode, negative after a contact) "
-        "and turning per step are medians; steps and turning over successful episodes.",
+        "and turning per step are medians; steps and turning over successful episodes. "
+        "Rows marked *(bound)* are ceilings, not methods: `clairvoyant` (the share of "
+        "episodes solvable at all, its plan replayed through the simulator; its path length "
+        "is no yardstick, as the optimum is known only in retrospect) and `model-oracle` (the "
+        "best to expect of an agent that knows the present and the obstacles' motion model, "
+        "not their future).",
         "",
     ]
     for family in families:
@@ -339,7 +358,7 @@ def write_benchmark_report(
         ]
         for arm in arms:
             s = table[family][arm]
-            ref_level = arm.sensing if arm.sensing != "oracle" else "map"
+            ref_level = arm.sensing if arm.sensing in ("sensor", "map") else "map"
             ref_arm = MethodRun(reference, ref_level,  # type: ignore[arg-type]
                                 arm.strategy if ref_level == "sensor" else "route")  # fmt: skip
             ref = g.get(ref_arm)
@@ -347,6 +366,8 @@ def write_benchmark_report(
             if ref is not None and arm != ref_arm:
                 d_s, d_e = _pair(g[arm], ref)
             label = f"**{arm.method}**" if arm.method == reference else arm.method
+            if _is_bound(arm.method):
+                label = f"*{arm.method}* (bound)"
             lines.append(
                 f"| {label} | {arm.sensing} | {arm.strategy} | {s['n']} | {_pct(s['success'])} "
                 f"| {_pct(s['collision'])} | {_pct(s['timeout'])} | {_pct(s['excess_median'])} "

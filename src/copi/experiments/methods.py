@@ -51,6 +51,7 @@ from copi.baselines import (
     navground_available,
     packaged_policy,
 )
+from copi.ceilings import Clairvoyant, ModelOracle
 from copi.core import SENSING_LEVELS, Agent, Sensing, check_sensing, check_strategy
 from copi.errors import InvalidArgumentError
 from copi.learning import Capabilities
@@ -202,7 +203,7 @@ def register_method(
     factory : callable
         An Agent class, or a function returning an Agent; called with ``params`` as
         keywords (and the capabilities first, for ``capabilities``).
-    sensing : {"sensor", "map", "oracle"}
+    sensing : {"sensor", "map", "oracle", "future"}
         The least level the method needs.
     levels : levels it runs at when named alone (default: ``sensor`` and ``map`` for a
         sensor-level method, else its own level).
@@ -526,6 +527,14 @@ def _register_builtins() -> None:
             params={"weights": weights, "guard": guard}, summary=summary,
             missing=f"its trained weights {weights}.npz, which copi does not ship here: train "
             f"them with copi rl train -o {weights}.npz (docs: copi against deep RL)")
+    # Bounds, not methods: what is possible (marked so in every table and figure).
+    reg("clairvoyant", Clairvoyant, sensing="future", default=True, bound=True,
+        summary="a bound: space-time A* on the obstacles' recorded future (they ignore the "
+        "agent), its plan replayed through the simulator: the share of episodes solvable")
+    reg("model-oracle", ModelOracle, sensing="oracle", default=True, bound=True,
+        summary="a bound: model-predictive control on 32 sampled futures of the obstacles' "
+        "random walk (its true parameters), replanned every step; knows the present and the "
+        "motion model, not the future (hand-written, tuned on seed 1)")
     margins = {"navground-hrvo": 0.6, "navground-hl": 0.3, "navground-orca": 0.3}
     for name, behavior in NAVGROUND_BEHAVIORS.items():
         reg(name, _navground(behavior), sensing="oracle", requires="peers",

@@ -4,7 +4,9 @@ An episode is one of copi's navigation episodes (a family's world, task and movi
 obstacles, drawn from a training seed no report uses), run at a sensing level; the
 global strategy of that level (:class:`~copi.online.Steering`: the route at ``map``, the
 goal at ``sensor``) gives the direction, and the agent sees exactly what
-:class:`~copi.baselines.PPOAgent` will see (:func:`~copi.baselines.policy_features`).
+:class:`~copi.baselines.PPOAgent` will see (:func:`copi.baselines._ppo.features`, in the
+frame of the direction; its action is turned back to the world's frame as the agent turns
+it).
 Episodes of the homicidal chauffeur (``task="chauffeur"``) take the game's direction for
 the evader instead, and end at capture.
 
@@ -27,7 +29,7 @@ import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
 
-from copi.baselines._ppo import features, observation_size
+from copi.baselines._ppo import direction_frame, features, observation_size, to_world
 from copi.core import Observation, check_sensing
 from copi.errors import InvalidArgumentError
 from copi.online import Steering
@@ -95,8 +97,8 @@ class LocalPolicyEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
             check_family(f)
         for lv in levels:
             check_sensing(lv)
-            if lv == "oracle":
-                raise InvalidArgumentError("a local policy runs at sensor or map, not oracle")
+            if lv not in ("sensor", "map"):
+                raise InvalidArgumentError(f"a local policy runs at sensor or map, not {lv}")
         self.families = tuple(families)
         self.levels = tuple(levels) if task == "navigation" else ("map",)
         self.task = task
@@ -189,6 +191,8 @@ class LocalPolicyEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         norm = math.hypot(a[0], a[1])
         if norm > 1.0:
             a /= norm
+        n = self.sim.sensor.n_rays
+        a = to_world(a, direction_frame(self.direction, n), n)
         w = self.reward
         before = self.sim.position.copy()
         u = self.direction

@@ -78,6 +78,8 @@ class TrainConfig:
     n_epochs: int = 10
     gamma: float = 0.99
     ent_coef: float = 0.0
+    log_std: float = 0.0
+    """The policy's initial log standard deviation of its actions (exploration noise)."""
     net: tuple[int, ...] = (64, 64)
     """Hidden layers of the actor (and of the critic)."""
     reward: Reward = field(default_factory=Reward)
@@ -100,6 +102,8 @@ class TrainConfig:
             v = getattr(self, key)
             if not (isinstance(v, int | float) and math.isfinite(v) and 0 <= v <= 1):
                 raise InvalidArgumentError(f"{key} must be a number in [0, 1]; got {v!r}")
+        if not (isinstance(self.log_std, int | float) and -5 <= self.log_std <= 2):
+            raise InvalidArgumentError(f"log_std must be a number in [-5, 2]; got {self.log_std!r}")
         if not self.net or not all(isinstance(h, int) and 1 <= h <= 1024 for h in self.net):
             raise InvalidArgumentError(f"net must be 1 to 6 layer widths in 1 .. 1024; got "
                                        f"{self.net!r}")  # fmt: skip
@@ -201,7 +205,7 @@ def train(
         batch_size=config.batch_size, n_epochs=config.n_epochs, gamma=config.gamma,
         ent_coef=config.ent_coef, seed=config.seed, device="cpu", verbose=0,
         policy_kwargs={"net_arch": {"pi": list(config.net), "vf": list(config.net)},
-                       "activation_fn": torch.nn.Tanh},
+                       "activation_fn": torch.nn.Tanh, "log_std_init": config.log_std},
     )  # fmt: skip
     curve: list[dict[str, float]] = []
     elapsed0 = 0.0
@@ -212,7 +216,10 @@ def train(
         meta = ckpt / "last.json"
         if state.is_file() and meta.is_file():
             saved = json.loads(meta.read_text())
-            if saved.get("config") != config.identity():
+            # the same run: every setting but the budget (a run resumes to more steps)
+            same = {k: v for k, v in json.loads(json.dumps(config.identity())).items()
+                    if k != "steps"}  # fmt: skip
+            if {k: v for k, v in dict(saved.get("config") or {}).items() if k != "steps"} != same:
                 raise InvalidArgumentError(
                     f"{ckpt} holds checkpoints of another training run; use another directory"
                 )
@@ -250,7 +257,7 @@ def train(
             os.replace(ckpt / "last.pt.tmp", ckpt / "last.pt")
             write_text(ckpt / "last.json", json.dumps(
                 {"config": config.identity(), "steps": int(model.num_timesteps),
-                 "curve": curve, "seconds": seconds}))  # fmt: skip
+                 "curve": curve, "seconds": seconds}), "json")  # fmt: skip
 
     left = config.steps - model.num_timesteps
     if left > 0:
@@ -272,7 +279,7 @@ def train(
                                         "seconds": summary["seconds"], "command": command,
                                         **config.identity()})  # fmt: skip
     save_policy(policy, out)
-    write_text(curve_path, json.dumps(summary, indent=1) + "\n")
+    write_text(curve_path, json.dumps(summary, indent=1) + "\n", "json")
     _curve_figure(curve, figure_path, title=out.stem)
     return summary
 

@@ -1,0 +1,134 @@
+"""The static distance to the goal on a grid: the cost-to-go both ceilings search towards.
+
+Why by hand: both ceilings look up the distance to the goal around walls hundreds of
+thousands of times an episode, at points no planner was asked about. A Dijkstra over a
+grid of the free space, once per episode, answers each look-up in nanoseconds; the
+visibility graph (:mod:`copi.planning`) would need a query per point, and scipy's
+``dijkstra`` a sparse graph of the grid built in Python first (slower than the search).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+from numpy.typing import NDArray
+
+from copi.geometry import clearance
+from copi.planning._kernels import _heap_pop, _heap_push
+from copi.world import World
+
+__all__ = ["GoalField"]
+
+_SQRT2 = math.sqrt(2.0)
+
+
+@njit(cache=True)
+def _dijkstra(free, gi, gj, h, out):  # type: ignore[no-untyped-def]
+    """Distances from cell (gi, gj) over the 8-connected free cells (no corner cutting),
+    cell side ``h``, into ``out`` (inf where unreachable)."""
+    ny, nx = free.shape
+    out[:, :] = np.inf
+    if not free[gi, gj]:
+        return
+    cap = 4 * (nx + ny) + 64
+    keys = np.empty(cap)
+    items = np.empty(cap, dtype=np.int64)
+    out[gi, gj] = 0.0
+    size = _heap_push(keys, items, 0, 0.0, gi * nx + gj)
+    done = np.zeros((ny, nx), dtype=np.bool_)
+    while size > 0:
+        d, u, size = _heap_pop(keys, items, size)
+        i = u // nx
+        j = u % nx
+        if done[i, j]:
+            continue
+        done[i, j] = True
+        for di in range(-1, 2):
+            for dj in range(-1, 2):
+                if di == 0 and dj == 0:
+                    continue
+                a = i + di
+                b = j + dj
+                if a < 0 or b < 0 or a >= ny or b >= nx or not free[a, b] or done[a, b]:
+                    continue
+                if di != 0 and dj != 0:
+                    if not (free[i, b] and free[a, j]):
+                        continue
+                    step = _SQRT2 * h
+                else:
+                    step = h
+                nd = d + step
+                if nd < out[a, b]:
+                    out[a, b] = nd
+                    if size == cap:
+                        cap *= 2
+                        k2 = np.empty(cap)
+                        i2 = np.empty(cap, dtype=np.int64)
+                        k2[:size] = keys[:size]
+                        i2[:size] = items[:size]
+                        keys = k2
+                        items = i2
+                    size = _heap_push(keys, items, size, nd, a * nx + b)
+
+
+@njit(cache=True, inline="always")
+def field_at(dist, x0, y0, h, x, y, gx, gy):  # type: ignore[no-untyped-def]
+    """The distance to go from (x, y): the grid's value at the nearest cell plus the way
+    to that cell's centre, or the straight distance when it is shorter (in sight of the
+    goal the grid's octile detours are not needed); inf off the reachable cells."""
+    j = int(math.floor((x - x0) / h + 0.5))
+    i = int(math.floor((y - y0) / h + 0.5))
+    ny, nx = dist.shape
+    if i < 0 or j < 0 or i >= ny or j >= nx:
+        return np.inf
+    v = dist[i, j]
+    if not math.isfinite(v):
+        return np.inf
+    cx = x0 + j * h - x
+    cy = y0 + i * h - y
+    v = v + math.sqrt(cx * cx + cy * cy)
+    straight = math.sqrt((gx - x) * (gx - x) + (gy - y) * (gy - y))
+    return straight if straight > v else v
+
+
+class GoalField:
+    """Distance to the goal around the walls, for a disc of ``radius``, on a grid of side
+    ``h`` (agent steps) over the world's bounding box.
+
+    A cell is free when its centre is at least ``radius - h / sqrt 2`` from every wall, so
+    every position the disc may take lies in a free cell (the field may then pass a gap a
+    hair narrower than the disc: it is a cost-to-go, not a proof of a path). Distances
+    are 8-connected (at most 8 % longer than straight lines), never shorter than the
+    straight distance; a look-up is :func:`field_at`.
+
+    Examples
+    --------
+    >>> room = World([[0, 0], [10, 0], [10, 10], [0, 10]])
+    >>> f = GoalField(room, [8.0, 5.0], 0.3)
+    >>> round(f.at(2.0, 5.0), 2), f.at(-5.0, 5.0)
+    (6.0, inf)
+    """
+
+    def __init__(self, world: World, goal: NDArray[np.float64], radius: float, h: float = 0.25):
+        segs = world.segments
+        lo = np.minimum(segs[:, [0, 1]].min(axis=0), segs[:, [2, 3]].min(axis=0)) - h
+        hi = np.maximum(segs[:, [0, 1]].max(axis=0), segs[:, [2, 3]].max(axis=0)) + h
+        nx = int(math.ceil((hi[0] - lo[0]) / h)) + 1
+        ny = int(math.ceil((hi[1] - lo[1]) / h)) + 1
+        xs = lo[0] + h * np.arange(nx)
+        ys = lo[1] + h * np.arange(ny)
+        pts = np.column_stack([np.tile(xs, ny), np.repeat(ys, nx)])
+        free = (clearance(pts, segs) >= radius - h / _SQRT2) & world.contains(pts)
+        self.free = free.reshape(ny, nx)
+        self.x0, self.y0, self.h = float(lo[0]), float(lo[1]), float(h)
+        self.goal = np.asarray(goal, dtype=np.float64).copy()
+        gj = int(np.clip(round((self.goal[0] - self.x0) / h), 0, nx - 1))
+        gi = int(np.clip(round((self.goal[1] - self.y0) / h), 0, ny - 1))
+        self.dist = np.empty((ny, nx))
+        _dijkstra(self.free, gi, gj, self.h, self.dist)
+
+    def at(self, x: float, y: float) -> float:
+        """The distance to go from (x, y) (see :func:`field_at`)."""
+        return float(field_at(self.dist, self.x0, self.y0, self.h, x, y, *self.goal))

@@ -1,0 +1,198 @@
+"""The model-predictive oracle: the best an agent can expect that knows the present and
+how the world moves, but not its future."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from copi.ceilings._clairvoyant import compass_moves
+from copi.ceilings._field import GoalField
+from copi.ceilings._kernels import (
+    escape_move,
+    field_grid,
+    occupancy,
+    risk_values,
+    sample_futures,
+    window,
+)
+from copi.core import Agent, Observation, Task, check_sensing
+from copi.errors import InvalidArgumentError
+from copi.geometry import clearance
+
+__all__ = ["ModelOracle", "TURN_SD"]
+
+TURN_SD = 0.6
+"""The standard deviation of a moving obstacle's heading change per step, radians: the
+simulator's (:class:`copi.world.Simulator`), the motion model's one parameter that an
+agent at level ``oracle`` cannot read off what it sees (it sees positions and the
+velocities of the last step: speeds and headings)."""
+
+_RETRIES = 4  # the simulator's headings tried by a disc a wall stops
+
+# Grid moves of the backward induction (in cells of ``res`` = 0.5: length 0, 0.5, 0.71 and
+# 1 agent step), and for each, the fractions of the way at which it is checked for walls.
+_OFFSETS = np.array(
+    [(0, 0), (1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1),
+     (2, 0), (-2, 0), (0, 2), (0, -2)], dtype=np.int64,
+)  # fmt: skip
+_RES = 0.5
+
+
+class ModelOracle(Agent):
+    """A bound, not a method: model-predictive control against the obstacles' motion
+    model (level ``oracle``, plus :data:`TURN_SD`).
+
+    Each step it draws ``samples`` futures of every disc's random walk over ``horizon``
+    steps, with the simulator's own rule and parameters (the heading and speed each disc
+    was seen moving at, its heading turning by N(0, 0.6) a step, walls turning it as they
+    turn the simulator's discs). From them it builds, on a window of 0.5-step cells, the
+    probability that each cell is in contact at each step (the sum of radii plus
+    ``margin``), and solves by backward induction over the window the least expected
+    cost of every cell: one per step, ``risk`` times minus the log of surviving each cell
+    entered, and after the horizon the distance to go around the walls. The move it makes
+    (16 directions at full and half speed, or waiting) minimises the exact risk of the
+    first step (the simulator's closest-approach test against each sample) plus that
+    cost. It replans every step. Nothing in it is learnt; its parameters were tuned on
+    validation seed 1.
+
+    What it knows beyond every baseline is exactly the motion model: a method at level
+    ``oracle`` sees where the discs are and how they moved last; this one also knows how
+    they will move, in distribution. It does not know their future (the clairvoyant
+    bound does).
+
+    Parameters
+    ----------
+    samples : int
+        Futures drawn per step (1 .. 256).
+    horizon : int
+        Steps each future runs (2 .. 40).
+    risk : float
+        Cost, in steps, of a certain contact's log-odds of surviving (see above).
+    margin : float
+        Added to the sum of radii when a cell or a first move counts as in contact.
+    seed : int
+        Seeds the futures drawn (the same episode, the same moves).
+    """
+
+    name = "model-oracle"
+    sensing = "oracle"
+
+    def __init__(
+        self,
+        *,
+        samples: int = 32,
+        horizon: int = 10,
+        risk: float = 10.0,
+        loss: float = 200.0,
+        discount: float = 0.3,
+        margin: float = 0.1,
+        escape: float = 0.4,
+        seed: int = 0,
+    ) -> None:
+        if int(samples) != samples or not 1 <= samples <= 256:
+            raise InvalidArgumentError(
+                f"samples must be a whole number in 1 .. 256; got {samples!r}"
+            )
+        if int(horizon) != horizon or not 2 <= horizon <= 40:
+            raise InvalidArgumentError(
+                f"horizon must be a whole number in 2 .. 40; got {horizon!r}"
+            )
+        if not (isinstance(discount, int | float) and 0 < discount <= 1):
+            raise InvalidArgumentError(f"discount must be a number in (0, 1]; got {discount!r}")
+        for key, v in (("risk", risk), ("loss", loss), ("margin", margin)):
+            if not (isinstance(v, int | float) and math.isfinite(v) and 0 <= v <= 1e4):
+                raise InvalidArgumentError(f"{key} must be a number in [0, 10000]; got {v!r}")
+        self.samples = int(samples)
+        self.horizon = int(horizon)
+        self.risk = float(risk)
+        self.loss = float(loss)
+        self.discount = float(discount)
+        self.escape = float(escape)
+        self.margin = float(margin)
+        self.seed = int(seed)
+        self.moves, _ = compass_moves()
+        self._risks: list[float] = []
+
+    def reset(self, task: Task) -> None:
+        check_sensing(task.sensing, self.sensing, method=self.name)
+        if task.world is None or task.goal is None:
+            raise InvalidArgumentError(
+                f"model-oracle needs the world and the goal (level 'oracle'); got a task at "
+                f"{task.sensing!r} without them"
+            )
+        self.rng = np.random.default_rng(self.seed)
+        self.r = float(task.agent_radius)
+        self.tol = float(task.goal_tolerance)
+        self.goal = np.asarray(task.goal, dtype=np.float64).copy()
+        self.segs = np.ascontiguousarray(task.world.segments)
+        self.field = GoalField(task.world, self.goal, self.r)
+        f = self.field
+        # The episode's grids: cells of _RES from the field's origin; walls checked on a
+        # grid twice as fine (cell centres, midpoints, quarter points of every move).
+        ny = int(f.dist.shape[0] * f.h / _RES) + 2
+        nx = int(f.dist.shape[1] * f.h / _RES) + 2
+        fine = _RES / 4
+        fy, fx = np.mgrid[0 : 4 * ny, 0 : 4 * nx]
+        pts = np.column_stack([f.x0 + fine * fx.ravel(), f.y0 + fine * fy.ravel()])
+        inside = task.world.contains(pts)
+        clear = np.where(inside, clearance(pts, self.segs), 0.0).reshape(4 * ny, 4 * nx)
+        self.clear = np.ascontiguousarray(clear)
+        self.fine = fine
+        free = clear >= self.r
+        ii, jj = np.mgrid[0:ny, 0:nx]
+        self.ok = free[4 * ii, 4 * jj]
+        self.mid_ok = np.zeros((len(_OFFSETS), ny, nx), dtype=bool)
+        for o, (di, dj) in enumerate(_OFFSETS):
+            good = self.ok.copy()
+            for frac in (1, 2, 3, 4):  # quarter points of the move, in fine cells
+                a = 4 * ii + di * frac
+                b = 4 * jj + dj * frac
+                inside = (a >= 0) & (b >= 0) & (a < 4 * ny) & (b < 4 * nx)
+                good &= inside & free[np.clip(a, 0, 4 * ny - 1), np.clip(b, 0, 4 * nx - 1)]
+            self.mid_ok[o] = good
+        self.terminal = field_grid(f.dist, f.x0, f.y0, f.h, f.x0, f.y0, _RES, ny, nx,
+                                   self.goal[0], self.goal[1])  # fmt: skip
+        cy = f.y0 + _RES * ii
+        cx = f.x0 + _RES * jj
+        self.goal_cells = np.hypot(cx - self.goal[0], cy - self.goal[1]) <= self.tol
+        self.terminal[self.goal_cells] = 0.0
+        self._half = int(math.ceil(self.horizon / _RES)) + 1
+        self._risks = []
+
+    def act(self, obs: Observation) -> NDArray[np.float64]:
+        if obs.position is None or obs.obstacles is None:
+            raise InvalidArgumentError("model-oracle needs the obstacles (level 'oracle')")
+        p = obs.position
+        obstacles = np.ascontiguousarray(obs.obstacles, dtype=np.float64).reshape(-1, 5)
+        radii = np.ascontiguousarray(obstacles[:, 4])
+        f = self.field
+        seed = int(self.rng.integers(2**31 - 1))
+        samples = sample_futures(obstacles, self.segs, self.samples, self.horizon, TURN_SD,
+                                 _RETRIES, seed, self.clear, f.x0, f.y0, self.fine)  # fmt: skip
+        n = 2 * self._half + 1
+        i0 = int(math.floor((p[1] - f.y0) / _RES)) - self._half
+        j0 = int(math.floor((p[0] - f.x0) / _RES)) - self._half
+        wx0 = f.x0 + j0 * _RES
+        wy0 = f.y0 + i0 * _RES
+        ok, mid_ok, terminal, goal = window(self.ok, self.mid_ok, self.terminal,
+                                            self.goal_cells, i0, j0, n)  # fmt: skip
+        # a cell stands for positions up to half a cell from its centre
+        P = occupancy(samples, radii, self.r, self.margin + _RES / 2, wx0, wy0, _RES, n)
+        V, cost = risk_values(P, ok, terminal, goal, _OFFSETS, mid_ok, self.risk,
+                              self.discount)  # fmt: skip
+        m, _, risk = escape_move(
+            p[0], p[1], self.goal[0], self.goal[1], self.tol, self.r, self.segs, samples,
+            radii, self.moves, self.margin, self.escape, V, wx0, wy0, _RES, self.loss,
+            f.dist, f.x0, f.y0, f.h,
+        )  # fmt: skip
+        self._risks.append(float(risk))
+        return np.zeros(2) if m < 0 else self.moves[m].copy()
+
+    def counters(self) -> dict[str, Any]:
+        r = self._risks
+        return {"mean_risk": float(np.mean(r)) if r else 0.0,
+                "max_risk": float(np.max(r)) if r else 0.0}  # fmt: skip

@@ -1,0 +1,179 @@
+"""The ceilings: the clairvoyant bound and the model-predictive oracle."""
+
+from __future__ import annotations
+
+import copy
+import math
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from copi.baselines import CompassGuard, Straight
+from copi.ceilings import TURN_SD, Clairvoyant, GoalField, ModelOracle
+from copi.ceilings._kernels import sample_futures
+from copi.core import check_sensing
+from copi.errors import InvalidArgumentError
+from copi.experiments import make_task, run_episode
+from copi.experiments._episode import obstacle_future
+from copi.experiments.methods import method_spec
+from copi.experiments.navigation import draw_episode
+from copi.geometry import clearance
+from copi.world import ObstacleSpec, Simulator, World
+
+
+def test_future_is_a_level_above_oracle_and_only_it_tells_the_future() -> None:
+    assert check_sensing("future", "oracle") == 3
+    sim = draw_episode("crowd", 0, 0)
+    assert make_task(sim, "oracle").future is None
+    task = make_task(sim, "future", max_steps=40)
+    assert task.future is not None and task.future.shape == (41, len(sim.radii), 3)
+    np.testing.assert_array_equal(task.future[0, :, :2], sim.centers)
+    np.testing.assert_array_equal(task.future[:, :, 2], np.broadcast_to(sim.radii, (41, len(sim.radii))))
+    assert method_spec("clairvoyant").bound and method_spec("model-oracle").bound
+    assert not method_spec("dwa").bound
+    with pytest.raises(InvalidArgumentError, match="clairvoyant needs sensing level 'future'"):
+        run_episode(Clairvoyant(), copy.deepcopy(sim), sensing="oracle", max_steps=10)
+
+
+@pytest.mark.parametrize("family", ["crowd", "indoor"])
+def test_the_discs_future_does_not_depend_on_the_agent(family: str) -> None:
+    """Same episode, agents that move differently: the same disc traces, step for step,
+    and the same as the future recorded with the agent standing still."""
+    base = draw_episode(family, 3, 0)
+    base.record = True
+    future = obstacle_future(base, 60)
+    traces = []
+    for agent in (Straight(), CompassGuard()):
+        sim = copy.deepcopy(base)
+        out = run_episode(agent, sim, sensing="map", max_steps=60, end_on_contact=False)
+        assert out.steps > 5
+        traces.append(np.array(sim.traces))
+    t = min(len(x) for x in traces)
+    np.testing.assert_array_equal(traces[0][:t], traces[1][:t])
+    # traces recorded from the first step on (``record`` set after the start)
+    np.testing.assert_array_equal(traces[0][:t], future[1 : t + 1, :, :2])
+
+
+@pytest.mark.parametrize(("family", "k"), [("crowd", 0), ("crowd", 5), ("crowd", 11),
+                                           ("indoor", 2), ("maps", 4), ("polygon", 7)])
+def test_the_clairvoyant_plan_replays_contact_free(family: str, k: int) -> None:
+    sim = draw_episode(family, k, 0)
+    sim.record = True
+    out = run_episode(Clairvoyant(), sim, sensing="future", max_steps=300)
+    assert out.outcome == "success" and out.contacts == 0 and out.min_clearance >= 0.0
+    assert out.counters["planned"] == 1
+    # replayed exactly: the agent's path stays clear of every disc at every step
+    path = np.array(sim.path)
+    traces = np.array(sim.traces)
+    gaps = np.linalg.norm(traces - path[:, None, :], axis=2) - sim.radii - sim.agent_radius
+    assert gaps.min() >= 0.0
+    assert clearance(path, sim.world.segments).min() >= sim.agent_radius - 1e-9
+
+
+def _corridor(disc_x: float, heading: float, speed: float) -> Simulator:
+    """A corridor 4 wide and 30 long; the agent at x = 2, the goal at x = 28; one disc of
+    radius 0.9 in the middle (1.1 free on either side of it)."""
+    w = World([[0, 0], [30, 0], [30, 4], [0, 4]], start=[2, 2], goal=[28, 2])
+    sim = Simulator(w, [2, 2], [28, 2], [[disc_x, 2]], [0.9], seed=0, speed=speed,
+                    turn_sd=0.0)
+    sim.headings[:] = heading
+    return sim
+
+
+def test_the_clairvoyant_waits_for_a_disc_that_blocks_the_way() -> None:
+    """A disc parked in a corridor 3 wide (nothing passes it) that leaves after a while:
+    the clairvoyant waits and then goes; a disc that never leaves makes it unsolvable."""
+    # the disc walks along the corridor away from the agent at 0.6 a step (the corridor is
+    # long enough that it does not come back before the agent is home)
+    w = World([[0, 0], [60, 0], [60, 2.4], [0, 2.4]], start=[2, 1.2], goal=[28, 1.2])
+    away = Simulator(w, [2, 1.2], [28, 1.2], [[6.0, 1.2]], [1.0], seed=0, speed=0.6,
+                     turn_sd=0.0)  # fmt: skip
+    away.headings[:] = 0.0
+    out = run_episode(Clairvoyant(), away, sensing="future", max_steps=200)
+    assert out.outcome == "success" and out.min_clearance >= 0
+    assert out.steps > (28 - 2 - 0.5) / 1.0 + 5  # held back by the disc
+    parked = Simulator(w, [2, 1.2], [28, 1.2], [[6.0, 1.2]], [1.0], seed=0, speed=0.0)
+    agent = Clairvoyant()
+    out = run_episode(agent, parked, sensing="future", max_steps=60)
+    assert out.outcome == "timeout" and agent.counters() == {"planned": 0, "nodes":
+                                                             agent.counters()["nodes"], "budget": 0}
+
+
+def test_the_goal_field_is_the_distance_around_walls() -> None:
+    # a wall from (5, 0) to (5, 8) in a 10 x 10 room: from (2, 1) to (8, 1) around its end
+    room = World([[0, 0], [4.9, 0], [4.9, 8], [5.1, 8], [5.1, 0], [10, 0], [10, 10],
+                  [0, 10]])  # fmt: skip
+    f = GoalField(room, np.array([8.0, 1.0]), 0.3)
+    around = 2 * math.hypot(3.0, 7.3)  # two straight legs past the wall's end (5, 8.3)
+    # the grid is 8-connected: a leg (dx, dy), dx < dy, is at best dy + (sqrt 2 - 1) dx
+    # long on it (8 % more here), plus a cell or two where the legs meet the grid
+    octile = 2 * (7.3 + (math.sqrt(2.0) - 1.0) * 3.0)
+    assert around * 0.97 <= f.at(2.0, 1.0) <= octile + 2 * 0.25
+    assert f.at(8.0, 3.0) == pytest.approx(2.0, abs=0.2)
+
+
+def test_the_motion_model_is_the_simulators() -> None:
+    """The oracle's sampled futures and the simulator's own, from one state: the same
+    distribution of positions after 1 and 3 steps (two-sample KS tests), in open space and
+    against a wall (where both turn discs away by the same rule)."""
+    w = World([[0, 0], [40, 0], [40, 40], [0, 40]])
+    for start, heading in (([20.0, 20.0], 0.7), ([39.0, 20.0], 0.0)):
+        sim = Simulator(w, [2, 2], [30, 30], [start], [0.8], seed=0, speed=0.8)
+        sim.headings[:] = heading
+        obst = np.array([[*start, 0.8 * math.cos(heading), 0.8 * math.sin(heading), 0.8]])
+        o = ModelOracle()
+        o.reset(make_task(sim, "oracle"))
+        mine = sample_futures(obst, o.segs, 2000, 3, TURN_SD, 4, 7, o.clear, o.field.x0,
+                              o.field.y0, o.fine)  # fmt: skip
+        theirs = np.empty((2000, 3, 2))
+        for s in range(2000):
+            twin = copy.deepcopy(sim)
+            twin.rng = np.random.default_rng(s)
+            for t in range(3):
+                twin.step(np.zeros(2))
+                theirs[s, t] = twin.centers[0]
+        for t in (0, 2):
+            for axis in (0, 1):
+                p = stats.ks_2samp(mine[:, t + 1, 0, axis], theirs[:, t, axis]).pvalue
+                assert p > 1e-3, (start, t, axis, p)
+
+
+def test_the_model_oracle_dodges_a_disc_coming_at_it() -> None:
+    """In a corridor 4 wide, a disc of radius 0.9 comes straight at the agent at 0.8 a step
+    (no turning): walking straight meets it; the oracle's model says so and it gives way."""
+    straight = run_episode(Straight(), _corridor(12.0, math.pi, 0.8), sensing="oracle",
+                           max_steps=80)  # fmt: skip
+    assert straight.outcome == "collision"
+    # there is room to pass at the side (2 - 0.9 - 2 * 0.3 = 0.5 to spare)
+    oracle = run_episode(ModelOracle(), _corridor(12.0, math.pi, 0.8), sensing="oracle",
+                         max_steps=80)  # fmt: skip
+    assert oracle.outcome == "success" and oracle.contacts == 0, oracle
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [({"samples": 0}, "samples must be a whole number in 1 .. 256"),
+     ({"horizon": 1}, "horizon must be a whole number in 2 .. 40"),
+     ({"risk": math.nan}, "risk must be a number in [0, 10000]"),
+     ({"discount": 0.0}, "discount must be a number in (0, 1]")],
+)  # fmt: skip
+def test_model_oracle_parameters_are_checked(kwargs: dict, message: str) -> None:
+    with pytest.raises(InvalidArgumentError, match=message.replace("[", r"\[").replace(
+            "(", r"\(").replace(")", r"\)").replace(".", r"\.")):  # fmt: skip
+        ModelOracle(**kwargs)
+
+
+def test_clairvoyant_parameters_are_checked() -> None:
+    with pytest.raises(InvalidArgumentError, match="weight must be a finite number >= 1"):
+        Clairvoyant(weight=0.5)
+    with pytest.raises(InvalidArgumentError, match="max_nodes must be a whole number"):
+        Clairvoyant(max_nodes=0)
+
+
+def test_obstacles_are_static_when_spec_says_so() -> None:
+    # a world with no moving obstacle: the clairvoyant is a static planner
+    room = World([[0, 0], [20, 0], [20, 20], [0, 20]], start=[2, 2], goal=[18, 18])
+    sim = Simulator.from_world(room, 0, obstacles=ObstacleSpec(count=(0, 0)))
+    out = run_episode(Clairvoyant(), sim, sensing="future", max_steps=100)
+    assert out.outcome == "success" and out.steps <= math.ceil((16 * math.sqrt(2) - 0.5) * 1.09)

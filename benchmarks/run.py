@@ -14,6 +14,7 @@ from benchmarks import (  # noqa: E402
     bench_lifelong,
     bench_online,
     bench_planning,
+    bench_rl,
     bench_world,
 )
 
@@ -27,6 +28,7 @@ def main() -> int:
         "games": bench_games.main(),
         "baselines": bench_baselines.main(),
         "lifelong": bench_lifelong.main(),
+        "rl": bench_rl.main(),
     }
     missed = [name for name, ok in results.items() if not ok]
     print("all goals met" if not missed else f"goals missed in: {', '.join(missed)}")

@@ -17,10 +17,20 @@ def caps_path(tmp_path_factory: pytest.TempPathFactory) -> str:
 
 def test_games_depend_on_their_index_only(caps_path: str) -> None:
     cfg = PursuitConfig(caps_path, games=3, horizon=120).resolved()
-    a, b = run_game(cfg, 2), run_game(cfg, 2)
-    assert a == b
-    assert a.survival == (a.capture_time if a.captured else a.survival)
-    assert a.outcome in ("captured", "collision", "escaped")
+    a = run_game(cfg, 2)
+    others = [run_game(cfg, k) for k in (0, 1)]  # games played in between change nothing
+    assert run_game(cfg, 2) == a
+    assert all(o.world != a.world for o in others)  # each index its own world
+    # survival is the capture time, the contact's time, or the whole horizon
+    rows = [a, *others]
+    for r in rows:
+        assert r.outcome in ("captured", "collision", "escaped")
+        if r.outcome == "captured":
+            assert r.captured and r.survival == r.capture_time < 120
+        elif r.outcome == "collision":
+            assert r.contacts >= 1 and r.survival < 120
+        else:
+            assert not r.captured and r.contacts == 0 and r.survival == 120.0
 
 
 def test_a_contact_ends_the_game_as_a_loss_and_the_rows_differ(caps_path: str) -> None:

@@ -3,6 +3,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from copi.experiments.report import _fig3, _fig4, _outcome_title
 from tests.common import SQUARE_ROOM
@@ -17,7 +18,20 @@ def test_fig4_without_any_success_draws_no_empty_legend(tmp_path: Path) -> None:
 def test_fig4_puts_the_tail_in_a_labelled_last_bin(tmp_path: Path) -> None:
     rng = np.random.default_rng(0)
     excess = {"a": rng.exponential(0.3, 500), "b": np.append(rng.exponential(0.2, 300), 40.0)}
-    assert _fig4(excess, tmp_path).exists()
+    drawn = []
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr("copi.experiments.report.save_figure", lambda fig, path: drawn.append(fig))
+        assert _fig4(excess, tmp_path) == tmp_path / "fig4_excess.png"
+    ax = drawn[0].axes[0]
+    hi = max(float(np.percentile(100 * np.concatenate(list(excess.values())), 98)), 50.0)
+    assert ax.get_xticklabels()[-1].get_text() == f"> {hi:.0f}"
+    # the count each method has beyond the threshold, written over the last bin
+    counts = sorted(t.get_text() for t in ax.texts)
+    assert counts == sorted(str(int((100 * e > hi).sum())) for e in excess.values())
+    assert int((100 * excess["b"] > hi).sum()) >= 1  # the 4000 % outlier among them
+    labels = ax.get_legend_handles_labels()[1]
+    assert "a (500 successful episodes)" in labels and "b (301 successful episodes)" in labels
+    assert f"b: median {100 * np.median(excess['b']):.1f} %" in labels
 
 
 def test_fig3_titles_say_each_outcome(tmp_path: Path) -> None:

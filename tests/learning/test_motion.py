@@ -202,7 +202,19 @@ def test_the_ablations_are_named_and_run(moving, tmp_path) -> None:
     assert isinstance(make_agent("copi-learnt-motion", moving), LearntAgent)
     assert make_agent("copi-learnt-priors", still).beta > 0
     assert make_agent("copi-learnt-persist", still).persist > 0
-    assert len(runs) == len(ABLATIONS)
+    # each ablation differs from copi-learnt in what its name says and in nothing else
+    base_spec = method_spec("copi-learnt")
+    differs = {
+        name: {k for k in set(method_spec(name).params) | set(base_spec.params)
+               if method_spec(name).params.get(k) != base_spec.params.get(k)}
+        | ({"capabilities"} if method_spec(name).capabilities != base_spec.capabilities else set())
+        for name in ABLATIONS
+    }  # fmt: skip
+    assert differs["copi-learnt"] == set()
+    assert differs["copi-learnt-priors"] == {"beta"}
+    assert differs["copi-learnt-persist"] == {"persist"}
+    assert differs["copi-learnt-motion"] == {"beta", "capabilities"}
+    assert set(runs) == set(ABLATIONS)
     # in the benchmark, on the same episodes, paired against copi-learnt
     from copi.experiments.benchmark import BenchmarkConfig, run_benchmark
     from copi.experiments.benchmark_report import write_benchmark_report

@@ -67,13 +67,49 @@ def test_star_is_the_paper_generator() -> None:
     assert np.array_equal(w.boundary, random_world(11).boundary) and w.holes == ()
 
 
+def _sees_every_vertex(ring: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Shapely's answer, independent of the kernel computation: which points see every
+    vertex of the polygon (each sight line inside it, up to a hair's tolerance)."""
+    poly = shapely.Polygon(ring).buffer(1e-7)
+    lines = shapely.linestrings(np.stack([np.broadcast_to(points[:, None, :],
+                                                          (len(points), len(ring), 2)),
+                                          np.broadcast_to(ring[None], (len(points), len(ring),
+                                                                       2))], axis=2))  # fmt: skip
+    return shapely.within(lines, poly).all(axis=1)
+
+
 def test_polygon_worlds_are_not_star_shaped_and_have_few_holes() -> None:
     holes = []
+    rng = np.random.default_rng(0)
     for k in range(60):
         w, _ = _world("polygon", k)
         assert not is_star_shaped(w.boundary), k
         holes.append(len(w.holes))
+        if k < 6:  # no point of a fine sample sees the whole boundary
+            lo, hi = w.boundary.min(axis=0), w.boundary.max(axis=0)
+            pts = rng.uniform(lo, hi, (3000, 2))
+            pts = pts[shapely.contains_xy(shapely.Polygon(w.boundary), pts[:, 0], pts[:, 1])]
+            assert len(pts) > 300 and not _sees_every_vertex(w.boundary, pts).any(), k
     assert set(holes) <= {0, 1, 2, 3} and len(set(holes)) >= 3
+
+
+def test_the_star_shape_check_agrees_with_sight_lines() -> None:
+    """The kernel test against shapely's sight lines on the paper's star worlds (seen whole
+    from some point) and on an L and a U drawn by hand."""
+    from copi.world import random_world
+
+    ell = np.array([[0, 0], [6, 0], [6, 2], [2, 2], [2, 6], [0, 6]], dtype=float)
+    u = np.array([[0, 0], [6, 0], [6, 6], [4, 6], [4, 2], [2, 2], [2, 6], [0, 6]], dtype=float)
+    grid = np.stack(np.meshgrid(np.linspace(0.05, 5.95, 60), np.linspace(0.05, 5.95, 60)),
+                    -1).reshape(-1, 2)  # fmt: skip
+    for ring in (ell, u):
+        inside = grid[shapely.contains_xy(shapely.Polygon(ring), grid[:, 0], grid[:, 1])]
+        assert is_star_shaped(ring) == bool(_sees_every_vertex(ring, inside).any())
+    rng = np.random.default_rng(1)
+    for k in range(5):  # some point of a fine sample sees every vertex of a star world
+        ring = random_world(k).boundary
+        pts = rng.uniform(ring.min(axis=0), ring.max(axis=0), (3000, 2))
+        assert is_star_shaped(ring) and _sees_every_vertex(ring, pts).any(), k
 
 
 def _sight_share(family: str, n: int) -> float:

@@ -168,15 +168,18 @@ class PolicyWeights:
         shapes = np.array([w.shape for w, _ in self.layers], dtype=np.int64)
         object.__setattr__(self, "_flat", np.ascontiguousarray(flat, dtype=np.float64))
         object.__setattr__(self, "_shapes", shapes)
-        width = int(max(w.shape[0] for w, _ in self.layers))
-        object.__setattr__(self, "_width", width)
+        width = int(max(max(w.shape) for w, _ in self.layers))
+        # the forward pass's scratch rows, allocated once (a decision is a few us)
+        object.__setattr__(self, "_buf", np.empty((2, width)))
 
     def act(self, x: NDArray[np.float64]) -> NDArray[np.float64]:
         """The velocity for one observation (mean action, clipped to [-1, 1] and norm 1)."""
+        x = np.asarray(x, dtype=np.float64)
+        if x.shape != (self.layers[0][0].shape[1],):
+            raise ValueError(f"an observation of shape ({self.layers[0][0].shape[1]},) was "
+                             f"expected; got {x.shape}")  # fmt: skip
         out = np.empty(2)
-        buf = np.empty((2, max(self._width, x.shape[0])))  # type: ignore[attr-defined]
-        _forward(self._flat, self._shapes, np.ascontiguousarray(x, dtype=np.float64), buf,  # type: ignore[attr-defined]
-                 out)  # fmt: skip
+        _forward(self._flat, self._shapes, x, self._buf, out)  # type: ignore[attr-defined]
         return out
 
     def act_batch(self, x: NDArray[np.float64]) -> NDArray[np.float64]:

@@ -125,7 +125,8 @@ def evaluate_command(
     )
     with ResultsStore(output, readonly=True) as store:
         s = summarize(store.episodes(run_id))
-    skipped = f", {s['skipped']} skipped (no valid task)" if s["skipped"] else ""
+    skipped = (f", {s['skipped']} skipped (no valid task; the first: {s['skip_reason']})"
+               if s["skipped"] else "")  # fmt: skip
     where = f"worlds of {world_file.name}" if world_file is not None else family
     if not s["episodes"]:
         out.print(f"{output}: {chosen.method} ({sensing}, {where}): no episode ran{skipped}")

@@ -10,6 +10,7 @@ Commands live in one module per group (``world``, ``learning``, ``experiments``)
 from __future__ import annotations
 
 import importlib
+import os
 import sqlite3
 import sys
 
@@ -87,6 +88,13 @@ def main(argv: list[str] | None = None) -> None:
         _error(f"{where}{exc.format_message()}")
     except CopiError as exc:
         _error(str(exc))
+    except BrokenPipeError:
+        # the reader went away (``copi inspect --json | head``): not an error of copi's;
+        # stop quietly, as the Python documentation advises (stdout to devnull first, so
+        # that flushing at exit raises nothing)
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        sys.exit(1)
     except OSError as exc:
         where = f"{exc.filename}: " if exc.filename else ""
         _error(f"{where}{exc.strerror or exc}")

@@ -263,7 +263,29 @@ def draw_episode(
     else:
         world = sample_world(family, rng, name=f"{family}-{k:05d}")
     sensor = RangeSensor(n_rays, max_range)
-    return Simulator.from_world(world, rng, agent_radius=agent_radius, sensor=sensor, record=record)
+    sim = Simulator.from_world(world, rng, agent_radius=agent_radius, sensor=sensor, record=record)
+    if world_file is not None:
+        # A user's world may have no way through for the agent (a door narrower than it):
+        # such an episode is no task at all, and is skipped saying so, never counted as a
+        # collision (the families are drawn with a way through).
+        _check_reachable(world_file, world_file_sha, k % len(worlds), agent_radius,
+                         tuple(sim.position), tuple(sim.goal))  # fmt: skip
+    return sim
+
+
+@lru_cache(maxsize=64)
+def _check_reachable(
+    path: str, sha: str, index: int, radius: float, start: tuple, goal: tuple
+) -> None:
+    from copi.planning import shortest_path
+
+    world = _world_list(path, sha)[index]
+    if not math.isfinite(shortest_path(world, start, goal, radius=radius).length):
+        raise InvalidWorldError(
+            f"world {world.name!r}: no way from the start ({start[0]:.4g}, {start[1]:.4g}) to "
+            f"the goal ({goal[0]:.4g}, {goal[1]:.4g}) for an agent of radius {radius:g}: a "
+            f"passage narrower than {2 * radius:g} closes it"
+        )
 
 
 def result_row(

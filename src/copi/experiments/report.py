@@ -62,10 +62,11 @@ def summarize(rows: list[Any]) -> dict[str, Any]:
     (reached, no contact), as in the paper. Skipped episodes (no valid task in their
     world) count in no rate; ``skipped`` says how many there were."""
     skipped = sum(r.get("outcome") == "skipped" for r in rows)
+    reason = next((r.get("reason") for r in rows if r.get("outcome") == "skipped"), None)
     rows = [r for r in rows if r.get("outcome") != "skipped"]
     n = len(rows)
     if n == 0:
-        return {"episodes": 0, "skipped": skipped}
+        return {"episodes": 0, "skipped": skipped, "skip_reason": reason}
     success = np.array([r["success"] for r in rows], dtype=bool)
     excess = np.array(
         [r["excess"] for r in rows if r["success"] and r["excess"] is not None], dtype=float
@@ -90,6 +91,7 @@ def summarize(rows: list[Any]) -> dict[str, Any]:
         "no_policy": float(sum(r["no_policy"] or 0 for r in rows) / max(steps.sum(), 1.0)),
         "no_optimum": int(sum(r["optimal_length"] is None for r in rows)),
         "skipped": skipped,
+        "skip_reason": reason,
     }
 
 

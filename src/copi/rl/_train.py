@@ -133,15 +133,19 @@ def export_policy(model: Any, n_rays: int = 32, max_range: float = 10.0,
     return PolicyWeights(tuple(layers), n_rays, max_range, info or {})
 
 
-def validation_success(policy: PolicyWeights, config: TrainConfig, episodes: int) -> float:
-    """Success of ``policy`` on fixed episodes of the validation seed (the training
-    families and levels in turn; the game's survival for the chauffeur task)."""
+def validation_success(
+    policy: PolicyWeights | None, config: TrainConfig, episodes: int, agent: Any = None
+) -> float:
+    """Success of ``policy`` (or of any ``agent``, e.g. copi's, for comparison) on fixed
+    episodes of the validation seed (the training families and levels in turn; the
+    game's survival for the chauffeur task)."""
     from copi.baselines._ppo import PPOAgent
     from copi.experiments._episode import optimal_to_goal, run_episode
     from copi.experiments.benchmark import benchmark_max_steps
     from copi.experiments.navigation import draw_episode
 
-    agent = PPOAgent(policy=policy)
+    if agent is None:
+        agent = PPOAgent(policy=policy)
     if config.task == "chauffeur":
         from copi.experiments.pursuit import PursuitConfig, run_game
 

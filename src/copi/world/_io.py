@@ -66,7 +66,13 @@ def load_worlds(
     try:
         data, starts = _parse_with_positions(text)
     except json.JSONDecodeError as exc:
-        raise WorldFileError(f"{p}:{exc.lineno}:{exc.colno}: not valid JSON ({exc.msg})") from None
+        hint = ""
+        if p.suffix.lower() == ".map" or text.lstrip().startswith("type "):
+            hint = (f"; it looks like a Moving AI map: make a world file of it with copi "
+                    f"world import-movingai {p} -o {p.with_suffix('.json').name}")  # fmt: skip
+        raise WorldFileError(
+            f"{p}:{exc.lineno}:{exc.colno}: not valid JSON ({exc.msg}){hint}"
+        ) from None
     except RecursionError:
         raise WorldFileError(f"{p}: JSON nested too deeply to be a world file") from None
     items = data if isinstance(data, list) else [data]

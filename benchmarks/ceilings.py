@@ -1,0 +1,137 @@
+"""Every family measured against what is possible: the clairvoyant bound and the
+model-predictive oracle beside every method, on the same episodes.
+
+    python benchmarks/ceilings.py --bench results/ceilings --episodes 200 \\
+        --oracle-episodes 100 --out docs/ceilings.md
+
+Runs ``copi benchmark`` twice into one directory (resumable): every default method and
+``clairvoyant`` on ``--episodes`` episodes per family, then ``model-oracle`` (1-3 s an
+episode) on the first ``--oracle-episodes``; the report pairs each row on the episodes
+both ran. Writes a summary: per family and level, the share solvable at all (the
+clairvoyant), the oracle, the best method and copi-learnt, the gap from each to the
+bound, and the oracle against each method (paired, 95 % intervals).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+METHODS = ["copi-learnt", "copi-extended", "compass-guard", "straight", "vfh", "dwa",
+           "tangent-bug", "replan", "navground-hrvo", "navground-hl", "clairvoyant"]  # fmt: skip
+FAMILIES = ("star", "polygon", "indoor", "maps", "crowd")
+
+
+def _bench(bench: Path, episodes: int, methods: list[str], workers: int) -> None:
+    subprocess.run([sys.executable, "-m", "copi.cli.main", "benchmark", "-o", str(bench),
+                    "--episodes", str(episodes), "--methods", ",".join(methods),
+                    "--workers", str(workers), "--against", "copi-learnt"],
+                   check=True)  # fmt: skip
+
+
+def _pct(x: float) -> str:
+    return "—" if not math.isfinite(x) else f"{100 * x:.1f} %"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--bench", default="results/ceilings")
+    ap.add_argument("--episodes", type=int, default=200)
+    ap.add_argument("--oracle-episodes", type=int, default=100)
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--out", default="docs/ceilings.md")
+    a = ap.parse_args()
+    from copi.experiments.benchmark_report import paired_difference, read_benchmark
+
+    bench = Path(a.bench)
+    from copi.experiments.methods import method_spec
+
+    methods = [m for m in METHODS if method_spec(m).available()]
+    t0 = time.perf_counter()
+    _bench(bench, a.episodes, methods, a.workers)
+    t1 = time.perf_counter()
+    _bench(bench, a.oracle_episodes, ["model-oracle"], a.workers)
+    t2 = time.perf_counter()
+    groups, _, _ = read_benchmark(bench)
+    lines = [
+        "# Ceilings: every family against what is possible",
+        "",
+        f"`python benchmarks/ceilings.py --bench {a.bench} --episodes {a.episodes} "
+        f"--oracle-episodes {a.oracle_episodes}` (benchmark seed 0; {(t1 - t0) / 60:.0f} min "
+        f"for the methods and the clairvoyant, {(t2 - t1) / 60:.0f} min for the oracle, on "
+        "2 cores). *clairvoyant* knows the obstacles' whole future (they ignore the agent, "
+        "so it can be recorded) and replays its space-time plan through the simulator: the "
+        "share of episodes solvable at all. *model-oracle* knows the present (positions and "
+        "velocities) and the obstacles' motion model (their random walk's true parameters), "
+        "not the future: the best to expect of an agent that cannot see ahead. Both are "
+        "bounds, not methods. Each row over the first "
+        f"{a.oracle_episodes} episodes of a family (those the oracle ran), so that every "
+        "cell is paired; Δ in points with 95 % bootstrap intervals.",
+        "",
+        "| family | solvable (clairvoyant) | model-oracle | best method (level) | "
+        "copi-learnt map / sensor | gap best → solvable | oracle − best method | "
+        "oracle beats |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    detail = [
+        "",
+        "## The oracle against every method (same episodes)",
+        "",
+        "| family | method (level) | success | oracle − method |",
+        "|---|---|---|---|",
+    ]
+    for fam in FAMILIES:
+        arms = groups.get(fam, {})
+        oracle = next((rows for arm, rows in arms.items() if arm.method == "model-oracle"), None)
+        if oracle is None:
+            continue
+        keep = {int(r["episode"]) for r in oracle if r["outcome"] != "skipped"}
+
+        def won(rows: list, keep: set[int] = keep) -> dict[int, bool]:
+            return {int(r["episode"]): r["outcome"] == "success" for r in rows
+                    if r["outcome"] != "skipped" and int(r["episode"]) in keep}  # fmt: skip
+
+        o = won(oracle)
+        rate = {}
+        for arm, rows in arms.items():
+            w = won(rows)
+            if w:
+                rate[arm] = (sum(w.values()) / len(w), w)
+        clair = next((v for arm, v in rate.items() if arm.method == "clairvoyant"), None)
+        methods_only = {arm: v for arm, v in rate.items()
+                        if not method_spec(arm.method).bound}  # fmt: skip
+        best_arm = max(methods_only, key=lambda arm: methods_only[arm][0])
+        beats = 0
+        for arm, (r, w) in sorted(methods_only.items(), key=lambda kv: -kv[1][0]):
+            common = sorted(set(o) & set(w))
+            d = paired_difference([o[k] for k in common], [w[k] for k in common])
+            beats += d.excludes_zero and d.estimate > 0
+            detail.append(
+                f"| {fam} | {arm.method} ({arm.sensing}) | {_pct(r)} | "
+                f"{100 * d.estimate:+.1f} [{100 * d.low:+.1f}, {100 * d.high:+.1f}] |"
+            )
+        b_rate, b_w = methods_only[best_arm]
+        common = sorted(set(o) & set(b_w))
+        d = paired_difference([o[k] for k in common], [b_w[k] for k in common])
+        cl = {arm.sensing: v[0] for arm, v in methods_only.items() if arm.method == "copi-learnt"}
+        solvable = clair[0] if clair else math.nan
+        lines.append(
+            f"| {fam} | {_pct(solvable)} | {_pct(sum(o.values()) / len(o))} | {best_arm.method} "
+            f"({best_arm.sensing}) {_pct(b_rate)} | {_pct(cl.get('map', math.nan))} / "
+            f"{_pct(cl.get('sensor', math.nan))} | {100 * (solvable - b_rate):+.1f} | "
+            f"{100 * d.estimate:+.1f} [{100 * d.low:+.1f}, {100 * d.high:+.1f}] | "
+            f"{beats} of {len(methods_only)} rows |"
+        )
+    out = Path(a.out)
+    out.write_text("\n".join(lines + detail) + "\n")
+    print(f"wrote {out}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,307 @@
+"""copi against deep RL: in family, a new world, a new task, and what each learner costs.
+
+    python benchmarks/rl_experiments.py --bench results/rl-bench --episodes 200 \\
+        --games 200 --out docs/rl.md
+
+Every number is paired on the same episodes (the benchmark's seed 0; the policies were
+trained on training seeds and tuned on validation seed 1, see ``rl_train_all.py``):
+
+- *in family*: ``ppo-F`` (PPO trained on family F only) on F, beside ``copi-learnt``,
+  ``compass-guard``, ``dwa`` and ``ppo`` (trained on the mix of all five);
+- *a new world*: ``copi-learnt`` learnt on ``star`` alone (its default: its capabilities
+  are learnt in the paper's random worlds, without any task) and ``ppo-star``, both tested
+  on every other family;
+- *a new task*: the homicidal chauffeur's evader (Experiment 2): copi's learnt agent with
+  its capabilities unchanged, ``ppo`` (its navigation policy under the game's direction)
+  and ``ppo-chauffeur`` (PPO trained for the game with the same step budget), same games;
+- *cost*: each learner's samples and wall time, and where PPO's learning curve (success
+  on the validation episodes) crosses copi-learnt's success on the same episodes.
+
+The benchmark part is ``copi benchmark`` (resumable: an interrupted run goes on); the games
+are played here, deterministically from (seed, game).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+FAMILIES = ("star", "polygon", "indoor", "maps", "crowd")
+METHODS = ["copi-learnt", "compass-guard", "dwa", "ppo", "ppo-guard",
+           *[f"ppo-{f}" for f in FAMILIES]]  # fmt: skip
+EVADERS = ["learnt", "compass-guard", "ppo", "ppo-guard", "ppo-chauffeur", "game"]
+
+
+def _pct(x: float) -> str:
+    return "—" if not math.isfinite(x) else f"{100 * x:.1f} %"
+
+
+def _success(rows: list) -> dict[int, bool]:
+    return {int(r["episode"]): r["outcome"] == "success" for r in rows
+            if r["outcome"] != "skipped"}  # fmt: skip
+
+
+def _delta(a: dict[int, bool], b: dict[int, bool]) -> tuple[str, bool]:
+    """a − b in points on the common episodes, with its interval; and whether a wins."""
+    from copi.experiments.benchmark_report import paired_difference
+
+    common = sorted(set(a) & set(b))
+    d = paired_difference([a[k] for k in common], [b[k] for k in common])
+    return (f"{100 * d.estimate:+.1f} [{100 * d.low:+.1f}, {100 * d.high:+.1f}]",
+            d.excludes_zero and d.estimate > 0)  # fmt: skip
+
+
+def _verdict(a: dict[int, bool], b: dict[int, bool], who_a: str, who_b: str) -> str:
+    from copi.experiments.benchmark_report import paired_difference
+
+    common = sorted(set(a) & set(b))
+    d = paired_difference([a[k] for k in common], [b[k] for k in common])
+    if not d.excludes_zero:
+        return "neither (interval holds 0)"
+    return f"**{who_a}**" if d.estimate > 0 else f"**{who_b}**"
+
+
+def run_benchmark(bench: Path, episodes: int, workers: int) -> None:
+    cmd = [sys.executable, "-m", "copi.cli.main", "benchmark", "-o", str(bench),
+           "--episodes", str(episodes), "--methods", ",".join(METHODS),
+           "--workers", str(workers), "--against", "copi-learnt"]  # fmt: skip
+    subprocess.run(cmd, check=True)
+
+
+def play_games(caps: Path, games: int, cache: Path) -> dict[str, dict[int, bool]]:
+    """Survival per game of each evader (cached in ``cache``, a JSON file)."""
+    from copi.experiments.pursuit import PursuitConfig, run_game
+
+    done: dict[str, dict[str, bool]] = json.loads(cache.read_text()) if cache.is_file() else {}
+    for evader in EVADERS:
+        have = done.get(evader, {})
+        if len(have) >= games:
+            continue
+        cfg = PursuitConfig(capabilities=str(caps) if evader != "game" else None,
+                            evader=evader, games=games, seed=0)  # fmt: skip
+        t0 = time.perf_counter()
+        for k in range(games):
+            if str(k) not in have:
+                have[str(k)] = run_game(cfg, k).outcome == "escaped"
+        done[evader] = have
+        cache.write_text(json.dumps(done))
+        print(
+            f"chauffeur, {evader}: {np.mean(list(have.values())):.3f} survival "
+            f"({time.perf_counter() - t0:.0f} s)",
+            flush=True,
+        )
+    return {e: {int(k): v for k, v in done[e].items() if int(k) < games} for e in EVADERS}
+
+
+def copi_validation(caps_path: Path, policies: dict[str, dict]) -> dict[str, float]:
+    """copi-learnt's success on each PPO configuration's validation episodes."""
+    from copi.experiments.methods import make_agent
+    from copi.learning import Capabilities
+    from copi.rl._train import TrainConfig, validation_success
+
+    caps = Capabilities.load(caps_path)
+    out = {}
+    for name, info in policies.items():
+        c = info["config"]
+        cfg = TrainConfig(families=tuple(c["families"]), levels=tuple(c["levels"]),
+                          task=c["task"])  # fmt: skip
+        n = info.get("validation_episodes", 60)
+        agent = make_agent("copi-learnt", caps)
+        out[name] = validation_success(None, cfg, n, agent=agent)
+    return out
+
+
+def copi_cost(caps_path: Path) -> tuple[int, str]:
+    from copi.learning import Capabilities
+
+    caps = Capabilities.load(caps_path)
+    p = caps.params
+    explore = int(p["worlds"]) * int(p["steps"])
+    walk = int(p.get("probe_worlds", 0)) * int(p.get("probe_steps", 0))
+    probes = int(p.get("probe_worlds", 0)) * (int(p.get("probe_steps", 0)) // 2) \
+        * (int(p.get("directions", 16)) + 1) * int(p.get("probe_horizon", 3))  # fmt: skip
+    total = explore + walk + probes
+    return total, (
+        f"{explore:,} exploration steps, {walk:,} steps of probing walks and at "
+        f"most {probes:,} counterfactual probe steps"
+    )
+
+
+def figure(policies: dict[str, dict], copi_val: dict[str, float], copi_samples: int,
+           out: Path) -> None:  # fmt: skip
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(8, 4.8))
+    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    for i, (name, info) in enumerate(sorted(policies.items())):
+        curve = info["curve"]
+        c = colors[i % len(colors)]
+        ax.plot([p["steps"] for p in curve], [100 * p["success"] for p in curve], "-",
+                color=c, label=f"{name} (PPO)")  # fmt: skip
+        ax.plot([copi_samples], [100 * copi_val[name]], "*", ms=14, color=c,
+                markeredgecolor="k", label=f"copi-learnt on {name}'s episodes")  # fmt: skip
+    ax.set_xscale("log")
+    ax.set_xlabel("learning samples (environment steps; copi: exploration and probes, no task)")
+    ax.set_ylabel("success on validation episodes (%)")
+    ax.set_title("Learning cost: PPO's curves against copi-learnt (stars), seed 1 episodes")
+    ax.legend(fontsize=7, ncol=2, loc="lower right")
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(out, dpi=120)
+    plt.close(fig)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--bench", default="results/rl-bench")
+    ap.add_argument("--episodes", type=int, default=200)
+    ap.add_argument("--games", type=int, default=200)
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--out", default="docs/rl.md")
+    a = ap.parse_args()
+    from copi.baselines._ppo import packaged_policy
+    from copi.experiments.benchmark_report import read_benchmark, summarize_rows
+
+    bench = Path(a.bench)
+    t0 = time.perf_counter()
+    run_benchmark(bench, a.episodes, a.workers)
+    t_bench = time.perf_counter() - t0
+    groups, _, _ = read_benchmark(bench)
+    caps = bench / "capabilities-learnt.npz"
+    succ: dict[tuple[str, str, str], dict[int, bool]] = {}
+    rate: dict[tuple[str, str, str], float] = {}
+    for fam, arms in groups.items():
+        for arm, rows in arms.items():
+            succ[fam, arm.method, arm.sensing] = _success(rows)
+            rate[fam, arm.method, arm.sensing] = summarize_rows(rows)["success"]
+    policies = {}
+    for name in ["mix", *FAMILIES, "chauffeur"]:
+        path = packaged_policy(f"ppo-{name}").with_suffix(".json")
+        if path.is_file():
+            policies[f"ppo-{name}"] = json.loads(path.read_text())
+    t1 = time.perf_counter()
+    games = play_games(caps, a.games, bench / "chauffeur-games.json")
+    t_games = time.perf_counter() - t1
+    copi_val = copi_validation(caps, policies)
+    samples, how = copi_cost(caps)
+
+    lines = [
+        "# copi against deep RL",
+        "",
+        f"`python benchmarks/rl_experiments.py --bench {a.bench} --episodes {a.episodes} "
+        f"--games {a.games}` ({t_bench / 60:.0f} min of benchmark, {t_games / 60:.0f} "
+        "min of games, on 2 cores). Benchmark seed 0, episodes 0 .. "
+        f"{a.episodes - 1} of each family; PPO trained on training seeds, its settings "
+        "chosen on validation seed 1 (`benchmarks/rl_train_all.py --tune`). Δ: paired "
+        "differences in points with 95 % bootstrap intervals; the winner is named only "
+        "where the interval excludes 0.",
+        "",
+        "## In family (level map, then sensor)",
+        "",
+        "| family | sensing | copi-learnt | compass-guard | dwa | ppo (mix) | ppo-guard | "
+        "ppo-F (in family) | Δ copi-learnt − ppo-F | better |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for level in ("map", "sensor"):
+        for fam in FAMILIES:
+            c = succ.get((fam, "copi-learnt", level))
+            p = succ.get((fam, f"ppo-{fam}", level))
+            if c is None or p is None:
+                continue
+            cells = [
+                _pct(rate.get((fam, m, level), math.nan))
+                for m in ("copi-learnt", "compass-guard", "dwa", "ppo", "ppo-guard", f"ppo-{fam}")
+            ]
+            d, _ = _delta(c, p)
+            lines.append(
+                f"| {fam} | {level} | "
+                + " | ".join(cells)
+                + f" | {d} | {_verdict(c, p, 'copi-learnt', f'ppo-{fam}')} |"
+            )
+    lines += [
+        "",
+        "## A new world: both learnt on `star` only, tested on the others (level map, then sensor)",
+        "",
+        "| family | sensing | copi-learnt (star, no task) | ppo-star | ppo-F (in family) | "
+        "Δ copi-learnt − ppo-star | better |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    wins_new = 0
+    for level in ("map", "sensor"):
+        for fam in FAMILIES[1:]:
+            c = succ.get((fam, "copi-learnt", level))
+            p = succ.get((fam, "ppo-star", level))
+            if c is None or p is None:
+                continue
+            d, won = _delta(c, p)
+            wins_new += won and level == "map"
+            lines.append(
+                f"| {fam} | {level} | {_pct(rate[fam, 'copi-learnt', level])} | "
+                f"{_pct(rate[fam, 'ppo-star', level])} | "
+                f"{_pct(rate.get((fam, f'ppo-{fam}', level), math.nan))} | {d} | "
+                f"{_verdict(c, p, 'copi-learnt', 'ppo-star')} |"
+            )
+    lines += [
+        "",
+        f"copi-learnt ahead of ppo-star (interval above 0) at map on {wins_new} of the "
+        "4 other families.",
+        "",
+        f"## A new task: the homicidal chauffeur's evader ({a.games} games, seed 0, "
+        "the same games for every evader)",
+        "",
+        "| evader | survival | Δ copi-learnt − it | better |",
+        "|---|---|---|---|",
+    ]
+    base = games["learnt"]
+    names = {"learnt": "copi-learnt (capabilities unchanged)", "game": "the game's direction "
+             "itself (no avoidance)", "ppo": "ppo (navigation policy, game's direction)",
+             "ppo-guard": "ppo-guard", "ppo-chauffeur": "ppo-chauffeur (trained for the game)",
+             "compass-guard": "compass-guard"}  # fmt: skip
+    for e in EVADERS:
+        d, _ = _delta(base, games[e]) if e != "learnt" else ("—", False)
+        better = _verdict(base, games[e], "copi-learnt", e) if e != "learnt" else ""
+        lines.append(
+            f"| {names[e]} | {_pct(float(np.mean(list(games[e].values()))))} | {d} | {better} |"
+        )
+    lines += [
+        "",
+        "## What each learner cost",
+        "",
+        f"copi-learnt: {samples:,} simulated steps ({how}), learnt once without any "
+        "task and used unchanged in every family and in the game.",
+        "",
+        "| PPO policy | environment steps | wall time | steps / s | validation success "
+        "at the end | copi-learnt on the same episodes | PPO first reaches copi at |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for name, info in sorted(policies.items()):
+        curve = info["curve"]
+        cv = copi_val[name]
+        cross = next((p["steps"] for p in curve if p["success"] >= cv), None)
+        lines.append(
+            f"| {name} | {info['steps']:,} | {info['seconds'] / 60:.1f} min | "
+            f"{info['steps_per_second']:,.0f} | {_pct(curve[-1]['success'])} | "
+            f"{_pct(cv)} | "
+            f"{f'{cross:,} steps' if cross else 'not within the budget'} |"
+        )
+    lines += ["", "![learning cost](rl.png)", ""]
+    out = Path(a.out)
+    figure(policies, copi_val, samples, out.with_suffix(".png"))
+    out.write_text("\n".join(lines) + "\n")
+    print(f"wrote {out}")
+
+
+if __name__ == "__main__":
+    main()

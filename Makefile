@@ -9,7 +9,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.install-stamp
 RESULTS ?= results
 
-.PHONY: install run test lint typecheck pytest bench clean
+.PHONY: install run test lint typecheck pytest docs bench clean
 
 install: $(STAMP)
 
@@ -47,7 +47,12 @@ typecheck: install
 pytest: install
 	$(BIN)/pytest -n 2
 
-test: lint typecheck pytest
+test: lint typecheck pytest docs
+
+# The documentation site into site/, warnings as errors (a broken link fails it).
+docs: install
+	$(BIN)/python -m pip install --quiet -e '.[docs]'
+	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict --quiet
 
 # The reference planner is compared with extremitypathfinder when it can be installed;
 # the long data checks (every Moving AI scenario line) run here, not in `make test`.

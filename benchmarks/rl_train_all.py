@@ -37,6 +37,7 @@ TUNING = {
 episodes of validation seed 1): SB3's default exploration noise (noisy, log std 0), less
 (base, -1; calm, -2), and with base's noise a larger learning rate or wider layers."""
 SHIPPED = Path(__file__).resolve().parents[1] / "src" / "copi" / "data" / "rl"
+DOCS = Path(__file__).resolve().parents[1] / "docs"
 
 
 def _run(name: str, args: list[str], out: Path, steps: int) -> dict:
@@ -86,13 +87,28 @@ def main() -> None:
         print(f"{name}: {r['steps']:,} steps, {r['seconds']:.0f} s ({r['steps_per_second']:,.0f}"
               f"/s), validation success {100 * last['success']:.1f} %")
     if a.install:
-        SHIPPED.mkdir(parents=True, exist_ok=True)
-        for name in CONFIGS:
-            src = out / f"ppo-{name}-s0.npz"
-            if src.is_file():
-                shutil.copy(src, SHIPPED / f"ppo-{name}.npz")
-                shutil.copy(out / f"ppo-{name}-s0.json", SHIPPED / f"ppo-{name}.json")
-        print(f"installed into {SHIPPED}")
+        _install(out)
+
+
+def _install(out: Path) -> None:
+    """Ship the seed-0 policies, their commands told as run from the repository with
+    ``--out results/rl`` (the directory of this machine's run is nobody else's)."""
+    from copi.baselines._ppo import load_policy, save_policy
+
+    SHIPPED.mkdir(parents=True, exist_ok=True)
+    prefix = str(out).rstrip("/") + "/"
+    for name in CONFIGS:
+        src = out / f"ppo-{name}-s0.npz"
+        if not src.is_file():
+            continue
+        policy = load_policy(src)
+        policy.info["command"] = policy.info.get("command", "").replace(prefix, "results/rl/")
+        save_policy(policy, SHIPPED / f"ppo-{name}.npz")
+        summary = json.loads((out / f"ppo-{name}-s0.json").read_text())
+        summary["command"] = summary.get("command", "").replace(prefix, "results/rl/")
+        (SHIPPED / f"ppo-{name}.json").write_text(json.dumps(summary, indent=1) + "\n")
+        shutil.copy(out / f"ppo-{name}-s0.png", DOCS / f"rl-curve-{name}.png")
+    print(f"installed into {SHIPPED}")
 
 
 if __name__ == "__main__":

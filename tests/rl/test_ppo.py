@@ -103,7 +103,7 @@ def test_a_short_training_beats_a_random_policy(tmp_path: Path) -> None:
               validation_episodes=10)  # fmt: skip
         # a checkpoint of another run is refused; the same run with more steps resumes
         with pytest.raises(InvalidArgumentError, match="another training run"):
-            train(dataclasses.replace(cfg, learning_rate=1e-3), tmp_path / "x.npz",
+            train(dataclasses.replace(cfg, learning_rate=3e-4), tmp_path / "x.npz",
                   checkpoints=ckpt)  # fmt: skip
         summary = train(cfg, tmp_path / "p.npz", checkpoints=ckpt, validate_every=6_000,
                         validation_episodes=10)  # fmt: skip

@@ -32,10 +32,11 @@ def train_command(
     steps: Annotated[int, typer.Option("--steps", min=1, help="Environment steps.")] = 2_000_000,
     seed: Annotated[int, seed_option("the network and the episodes' order")] = 0,
     envs: Annotated[int, typer.Option("--envs", min=1, max=256, help="Vectorised envs.")] = 8,
-    learning_rate: Annotated[float, typer.Option("--lr", min=0.0, max=1.0)] = 3e-4,
+    learning_rate: Annotated[float, typer.Option("--lr", min=0.0, max=1.0,
+                                                 help="PPO's learning rate.")] = 1e-3,
     ent_coef: Annotated[float, typer.Option("--ent", min=0.0, max=1.0)] = 0.0,
     log_std: Annotated[float, typer.Option("--log-std", min=-5.0, max=2.0,
-                                           help="Initial log std of the actions.")] = 0.0,
+                                           help="Initial log std of the actions.")] = -1.0,
     net: Annotated[str, typer.Option("--net", help="Hidden layer widths, e.g. 64,64.")] = "64,64",
     checkpoints: Annotated[
         Path | None,

@@ -59,6 +59,7 @@ from copi.online import CopiAgent, LearntAgent
 
 __all__ = [
     "ABLATIONS",
+    "methods_markdown",
     "ENTRY_POINTS",
     "LEGACY_NAMES",
     "MethodRun",
@@ -267,6 +268,21 @@ def method_names() -> tuple[str, ...]:
     """Every registered method's name, copi's modes first, then the baselines, peers and
     bounds, then those of other packages (in the order registered)."""
     return _REGISTRY.names()
+
+
+def methods_markdown() -> str:
+    """The table of copi's built-in methods (name, levels, extra, what it is) as the README
+    and the docs show it: generated, never typed (a test compares the README with it)."""
+    rows = ["| method | levels | needs | what it is |", "|---|---|---|---|"]
+    for name in method_names():
+        spec = method_spec(name)
+        if spec.factory.__module__.split(".")[0] != "copi":
+            continue  # another package's
+        kind = " *(bound)*" if spec.bound else " *(ablation)*" if spec.ablation else ""
+        extra = {"peers": "extra `peers`", "rl-weights": "shipped weights"}.get(
+            spec.requires or "", "")
+        rows.append(f"| `{name}`{kind} | {', '.join(spec.levels)} | {extra} | {spec.summary} |")
+    return "\n".join(rows) + "\n"
 
 
 def method_spec(name: str) -> MethodSpec:

@@ -1,0 +1,72 @@
+"""The documentation: short README, generated blocks up to date, every link there, and
+the tutorials' code runs as written."""
+
+from __future__ import annotations
+
+import importlib.util
+import re
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+DOCS = ROOT / "docs"
+TUTORIALS = sorted((DOCS / "tutorials").glob("*.md"))
+
+
+def _tool():
+    spec = importlib.util.spec_from_file_location("update_docs", ROOT / "tools" / "update_docs.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _python_blocks(path: Path) -> list[str]:
+    return re.findall(r"```python\n(.*?)```", path.read_text(), re.S)
+
+
+def test_the_readme_is_short_and_its_links_exist() -> None:
+    text = (ROOT / "README.md").read_text()
+    assert len(text.splitlines()) <= 200
+    links = re.findall(r"\]\(([^)#]+)(?:#[^)]*)?\)", text)
+    assert links
+    missing = [x for x in links if not x.startswith("http") and not (ROOT / x).exists()]
+    assert not missing, missing
+
+
+@pytest.mark.parametrize("page", ["README.md", "docs/concepts/pipeline.md"])
+def test_generated_blocks_are_what_the_tool_writes(page: str) -> None:
+    """The methods table and the headline results are generated (never typed): a page
+    that differs from what ``python tools/update_docs.py`` writes fails here."""
+    path = ROOT / page
+    assert path.read_text() == _tool().generated(path), (
+        f"{page} is out of date: run python tools/update_docs.py"
+    )
+
+
+def test_a_results_line_that_differs_from_its_source_fails(tmp_path: Path) -> None:
+    tool = _tool()
+    page = tmp_path / "page.md"
+    page.write_text("<!-- methods -->\nstale\n<!-- /methods -->\n")
+    assert "stale" not in tool.generated(page) and "| `copi-learnt` |" in tool.generated(page)
+
+
+@pytest.mark.parametrize("page", TUTORIALS, ids=[p.stem for p in TUTORIALS])
+def test_the_tutorials_run_as_written(page: Path, tmp_path: Path, monkeypatch) -> None:
+    blocks = _python_blocks(page)
+    assert blocks, f"{page.name} has no Python"
+    monkeypatch.chdir(tmp_path)
+    namespace: dict = {"__name__": f"tutorial_{page.stem}"}
+    for code in blocks:
+        exec(compile(code, str(page), "exec"), namespace)  # noqa: S102
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("page", ["README.md", "docs/index.md"])
+def test_the_quickstart_runs(page: str, tmp_path: Path, monkeypatch) -> None:
+    """The quickstart learns at the preset's full scale (about a minute): in ``make bench``."""
+    monkeypatch.chdir(tmp_path)
+    (code,) = _python_blocks(ROOT / page)
+    exec(compile(code, page, "exec"), {"__name__": "quickstart"})  # noqa: S102
+    assert (tmp_path / "caps-learnt.npz").is_file()

@@ -1,0 +1,75 @@
+"""Write the generated blocks of the README and the docs (never typed by hand):
+
+    python tools/update_docs.py
+
+- between ``<!-- methods ... -->`` and ``<!-- /methods -->``: the registry's table of
+  methods (:func:`copi.experiments.methods.methods_markdown`);
+- between ``<!-- results ... -->`` and ``<!-- /results -->`` (README only): the headline
+  rows, each quoted whole from the generated results page it names (``RESULTS`` below).
+
+``tests/test_docs.py`` fails when a block differs from what this script would write.
+"""
+
+from __future__ import annotations
+
+import re
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "src"))
+
+RESULTS: list[tuple[str, str, str]] = []
+"""(source page, the row's first cell, what the line says of it): each headline is the
+row of a generated table whose first cells match, quoted whole."""
+
+
+def _block(text: str, tag: str, body: str) -> str:
+    pattern = re.compile(rf"(<!-- {tag}[^>]*-->\n).*?(<!-- /{tag} -->)", re.S)
+    if not pattern.search(text):
+        raise SystemExit(f"no <!-- {tag} --> block")
+    return pattern.sub(lambda m: m.group(1) + body + m.group(2), text)
+
+
+def quoted_row(page: str, first: str) -> str:
+    """The row of ``docs/page`` whose first cells are ``first`` (e.g. "| crowd | map |"),
+    under its table's header."""
+    header: list[str] = []
+    previous = ""
+    for line in (ROOT / "docs" / page).read_text().splitlines():
+        if line.startswith("|") and not previous.startswith("|"):
+            header = [line]
+        elif line.startswith("|---"):
+            header.append(line)
+        elif line.startswith(first):
+            return "\n".join([*header, line])
+        previous = line
+    raise SystemExit(f"docs/{page}: no row starting {first!r}")
+
+
+def results_block() -> str:
+    out = []
+    for page, first, label in RESULTS:
+        out.append(f"{label} ([docs/{page}](docs/{page})):\n\n{quoted_row(page, first)}\n")
+    return "\n".join(out)
+
+
+def generated(path: Path) -> str:
+    from copi.experiments.methods import methods_markdown
+
+    text = path.read_text()
+    text = _block(text, "methods", methods_markdown())
+    if "<!-- results" in text:
+        text = _block(text, "results", results_block())
+    return text
+
+
+def main() -> None:
+    for rel in ("README.md", "docs/concepts/pipeline.md"):
+        path = ROOT / rel
+        path.write_text(generated(path))
+        print(f"wrote {rel}")
+
+
+if __name__ == "__main__":
+    main()

@@ -212,3 +212,16 @@ def test_stale_capabilities_are_refused_not_reused(
     with pytest.raises(InvalidArgumentError, match="learnt with worlds=4, not 5"):
         bm.ensure_capabilities(tmp_path, {"faithful"}, seed=0)
     assert path.read_bytes() == before
+
+
+def test_intervals_are_printed_for_what_they_are() -> None:
+    from copi.experiments.benchmark_report import _diff
+
+    spread = paired_difference([1, 0, 1, 1, 0, 1, 1, 1, 0, 1, 1, 1], [0] * 12)
+    assert _diff(spread).startswith("+75.0 [") and "alike" not in _diff(spread)
+    # every pair differs by the same amount: no spread to show, and the table says so
+    alike = paired_difference([1] * 12, [0] * 12)
+    assert _diff(alike) == "+100.0 (all 12 pairs alike)"
+    few = paired_difference([1, 0], [0, 0])
+    assert _diff(few) == "+50.0 (n = 2, no interval)"
+    assert _diff(paired_difference([], [])) == "—"

@@ -168,12 +168,19 @@ def test_a_different_configuration_is_refused_and_the_file_kept(
 def test_report_reads_everything_from_the_store(caps_path: str, tmp_path: Path) -> None:
     out = tmp_path / "r.sqlite"
     evaluate(NavigationConfig(caps_path, worlds=6, max_steps=300, record=4), out)
+    evaluate(NavigationConfig(caps_path, worlds=6, max_steps=300, record=4, sensing="sensor"),
+             out)  # fmt: skip
     evaluate(NavigationConfig(None, method="compass-guard", worlds=6, max_steps=300), out)
     report = write_report([out], tmp_path / "report")
     text = report.path.read_text()
-    assert "| copi-faithful | 6 |" in text and "| compass-guard | 6 |" in text
+    # one method at two levels: two rows that say their level, two Fig. 3 files
+    assert "| copi-faithful | map | star | 6 |" in text
+    assert "| copi-faithful | sensor | star | 6 |" in text
+    assert "| compass-guard | map | star | 6 |" in text
     names = sorted(p.name for p in (tmp_path / "report").iterdir())
-    assert "fig4_excess.png" in names and "fig3_copi_faithful.png" in names
+    assert "fig4_excess.png" in names
+    assert {"fig3_copi_faithful__map__star.png", "fig3_copi_faithful__sensor__star.png"} <= set(
+        names)
 
 
 def test_a_world_file_is_run_episode_by_episode(caps_path: str, tmp_path: Path) -> None:

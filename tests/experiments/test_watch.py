@@ -29,6 +29,31 @@ def test_copi_steps_are_explained(caps) -> None:  # type: ignore[no-untyped-def]
     assert not np.array_equal(pics[0], pics[-1])
 
 
+def test_copi_learnt_shows_the_direction_and_the_safety_it_chose_by() -> None:
+    learnt = learn(LearnParams(worlds=6, steps=150, directions=16, safety=True, probe_worlds=8,
+                               probe_steps=60, seed=1))  # fmt: skip
+    w = watch_episode("copi-learnt", learnt, family="crowd", episode=2, max_steps=25)
+    for step in w.steps:
+        head, choice = step.text.split("\n")
+        assert head.startswith("node ") and "global direction" in head and "P(safe)" in head
+        assert choice.startswith("choice: ")
+        assert step.candidates.shape[1] == 2 and len(step.candidates) <= 16
+        if choice.startswith("choice: move"):  # the move made is the move named
+            heading = float(choice.split("(")[1].split(" deg")[0])
+            made = np.degrees(np.arctan2(step.action[1], step.action[0])) % 360
+            assert abs((made - heading + 180) % 360 - 180) < 1.0
+    scored = [s for s in w.steps if len(s.candidates)]
+    assert scored and all("P(safe) 0." in s.text or "P(safe) 1." in s.text for s in scored
+                          if "choice: move" in s.text)  # fmt: skip
+    # the watched decisions are the agent's own: the same episode unwatched takes the same path
+    from copi.experiments import make_agent, run_episode
+    from copi.experiments.navigation import draw_episode
+
+    sim = draw_episode("crowd", 2, 0, record=True)
+    run_episode(make_agent("copi-learnt", learnt), sim, sensing="map", max_steps=25)
+    np.testing.assert_allclose(np.array(sim.path), np.array(w.sim.path))
+
+
 def test_baselines_say_their_name_and_the_gif_has_every_frame(tmp_path: Path) -> None:
     worlds = tmp_path / "w.json"
     save_worlds([U_TRAP], worlds)

@@ -136,6 +136,8 @@ def _diff(d: PairedDifference, scale: float = 100.0) -> str:
         return "—"
     if d.n < MIN_PAIRS or not math.isfinite(d.low):
         return f"{scale * d.estimate:+.1f} (n = {d.n}, no interval)"
+    if d.low == d.high:  # every resample the same: the pairs all differ alike
+        return f"{scale * d.estimate:+.1f} (all {d.n} pairs alike)"
     return f"{scale * d.estimate:+.1f} [{scale * d.low:+.1f}, {scale * d.high:+.1f}]"
 
 

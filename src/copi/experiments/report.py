@@ -20,6 +20,8 @@ __all__ = ["Report", "summarize", "summarize_games", "warnings_for", "write_repo
 
 SUMMARY_COLUMNS = [
     ("method", "method"),
+    ("sensing", "sensing"),
+    ("where", "worlds"),
     ("episodes", "episodes"),
     ("success", "success"),
     ("contact", "collision"),
@@ -295,17 +297,24 @@ def write_report(
                 if run["experiment"] != "navigation":
                     continue
                 rows = store.episodes(run["run_id"])
-                label = run["method"]
+                cfg = run["config"]
+                sensing = cfg.get("sensing", "map")
+                # one method at two levels (or in two families) is two rows, two curves
+                # and two Fig. 3 files, each named by its level and worlds
+                world_file = cfg.get("world_file")
+                short = (f"worlds of {Path(str(world_file)).name}" if world_file
+                         else cfg.get("family", "star"))  # fmt: skip
+                label = f"{run['method']} ({sensing}, {short})"
                 s = summarize(rows)
-                s["method"] = label
+                s["method"], s["sensing"], s["where"] = run["method"], sensing, short
                 summaries.append(s)
                 excess[label] = np.array(
                     [r["excess"] for r in rows if r["success"] and r["excess"] is not None],
                     dtype=float,
                 )
-                cfg = run["config"]
                 where = (
-                    f"the worlds of a world file (content {str(cfg['world_file_sha'])[:12]})"
+                    f"the worlds of {Path(str(world_file)).name if world_file else 'a world file'}"
+                    f" (content {str(cfg['world_file_sha'])[:12]})"
                     if cfg.get("world_file_sha") else f"family {cfg.get('family', 'star')}"
                 )  # fmt: skip
                 guard = cfg.get("guard")
@@ -318,7 +327,7 @@ def write_report(
                     f"{cfg.get('end_on_contact', False)}; copi {run['versions'].get('copi')}"
                     + (f"; {s['skipped']} episodes skipped (no valid task)" if s["skipped"] else "")
                 )
-                fig = _fig3(store.trajectories(run["run_id"], label), out, label)
+                fig = _fig3(store.trajectories(run["run_id"], run["method"]), out, label)
                 if fig is not None:
                     figures.append(fig)
     games: list[dict[str, Any]] = []

@@ -29,7 +29,7 @@ from copi.errors import InvalidArgumentError
 from copi.experiments._episode import EpisodeOutcome, run_episode
 from copi.experiments.methods import make_agent, method_spec
 from copi.learning import Capabilities
-from copi.online import CopiAgent
+from copi.online import CopiAgent, LearntAgent
 from copi.world import Simulator, rasterize
 
 __all__ = ["Step", "WatchedEpisode", "save_watch", "watch_episode"]
@@ -112,6 +112,32 @@ class _Explaining(Agent):
                 f"policy {choice} in the template's frame (of {options}){where}"
             )
             cands = d.candidate_actions
+        elif isinstance(agent, LearntAgent):
+            agent.explain = True
+            action = np.asarray(agent.act(obs), dtype=np.float64)
+            e = agent.last_explained
+            assert e is not None
+            p = e["safety"]
+            n_dir = len(p) - 1
+            angles = 2 * np.pi * np.arange(n_dir) / n_dir
+            seen = np.isfinite(p[:n_dir])
+            choice = e["choice"]
+            what = {-1: "nothing (no direction to go)", -2: "escape (the guard refused all)",
+                    -4: "wait (safer than every move)"}.get(
+                choice, (f"move {choice} ({_heading(action)}), P(safe) {p[choice]:.2f}"
+                         if math.isfinite(p[choice]) else
+                         f"move {choice} ({_heading(action)}), the guard's fallback (it "
+                         "refused every move; this one runs into no hit)")
+                if 0 <= choice < n_dir else str(choice))  # fmt: skip
+            best = ", ".join(f"{_heading([math.cos(angles[d]), math.sin(angles[d])])} "
+                             f"{p[d]:.2f}" for d in np.argsort(-np.nan_to_num(p[:n_dir], nan=-1))
+                             [: min(3, int(seen.sum()))])  # fmt: skip
+            text = (
+                f"node {e['node']} -> template {e['template']}; global direction "
+                f"{_heading(e['direction'])}; P(safe) scored for {int(seen.sum())} of {n_dir} "
+                f"moves (best: {best})\nchoice: {what}"
+            )
+            cands = np.stack([np.cos(angles[seen]), np.sin(angles[seen])], axis=1)
         else:
             action = np.asarray(agent.act(obs), dtype=np.float64)
             speed = math.hypot(action[0], action[1])
@@ -256,7 +282,8 @@ def _frame(watched: WatchedEpisode, t: int, path: Any, traces: Any, size: int) -
         draw.text((x, y + 3 * line_h), words, fill=OUTCOME_COLORS[out.outcome], font=font)
     else:
         legend = (
-            "grey: the template's moves; purple: the chosen one; orange: rays"
+            "grey: the moves considered (copi-extended: the template's; copi-learnt: those "
+            "scored); purple: the chosen one; orange: rays"
             if len(watched.steps[t].candidates)
             else "purple: the move made; orange: rays"
         )

@@ -86,6 +86,9 @@ class LearntAgent(Agent):
             )
         self.capabilities = capabilities
         self.name = name
+        self.explain = False
+        """Keep what each decision rested on in :attr:`last_explained` (copi watch)."""
+        self.last_explained: dict[str, Any] | None = None
         self.guard = float(guard)
         for key, v in (("alpha", alpha), ("beta", beta)):
             # a direction's alignment bounds its score only for weights >= 0
@@ -166,6 +169,12 @@ class LearntAgent(Agent):
         self.n_decisions += 1
         self.n_waits += out[4] == -4.0
         node = int(out[2])
+        if self.explain:  # for copi watch: what the choice rested on
+            self.last_explained = {
+                "direction": np.array(desired, dtype=np.float64), "node": node,
+                "template": int(self._templates[node]), "choice": int(out[4]),
+                "safety": self._p[: self._prior.shape[1] + 1].copy(),
+            }  # fmt: skip
         self._context = int(self._templates[node])
         self._prev_landmark = int(self._landmarks[node]) if node < len(self._landmarks) else -1
         self._keep = int(out[4]) if out[4] >= 0 else -1

@@ -68,3 +68,20 @@ def test_a_reader_that_stops_early_is_no_error(learnt_caps: Path) -> None:
     proc.wait(timeout=60)
     assert first == b"{"
     assert "Broken pipe" not in err and "Traceback" not in err and "error" not in err, err
+
+
+def test_a_run_with_no_success_says_what_to_try(tmp_path: Path, capsys) -> None:
+    # doors the agent fits through, but straight ignores the moving discs
+    out = tmp_path / "none.sqlite"
+    code, text, err = run(["evaluate", "--method", "straight", "--world-file",
+                           str(_room(tmp_path, 2.0)), "--worlds", "3", "-o", str(out),
+                           "--seed", "1"], capsys)  # fmt: skip
+    assert code == 0, err
+    assert "success 0.0 %, collision 100.0 %" in text  # (seed 1: every episode)
+    assert "median excess — (no success)" in text and "nan" not in text
+    assert "straight: no episode succeeded; most episodes ended in a collision: try" in err
+    # a run that succeeds gets no such warning
+    code, text, err = run(["evaluate", "--method", "compass-guard", "--world-file",
+                           str(_room(tmp_path, 2.0)), "--worlds", "3", "-o",
+                           str(tmp_path / "some.sqlite"), "--seed", "1"], capsys)  # fmt: skip
+    assert code == 0 and "success 0.0 %" not in text and "no episode succeeded" not in err

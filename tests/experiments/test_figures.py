@@ -2,6 +2,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from copi.experiments import random_walk_episodes, save_episode_gif, save_episode_png
@@ -34,3 +35,31 @@ def test_gif_needs_a_recorded_episode(tmp_path: Path) -> None:
     sim = Simulator.from_world(PILLARS, 0)
     with pytest.raises(ValueError, match="record=True"):
         save_episode_gif(sim, tmp_path / "x.gif")
+
+
+def test_the_capability_figures_show_what_they_say(faithful_caps, tmp_path: Path) -> None:
+    """The context map draws a spanning tree of the map (one edge fewer than nodes per
+    piece, not the hairball of every edge), and the H(k) plot's legend names its curve,
+    the rule's criterion and the refinement kept."""
+    from matplotlib.collections import LineCollection
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    from copi.experiments import capability_figures as cf
+    from copi.learning import Capabilities
+
+    caps = Capabilities.load(faithful_caps)
+    drawn = []
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(cf, "save_figure", lambda fig, path: drawn.append(fig) or path)
+        cf.save_context_map(caps, tmp_path)
+        cf.save_skeleton_curve(caps, tmp_path)
+    (lines,) = [c for c in drawn[0].axes[0].collections if isinstance(c, LineCollection)]
+    n = len(caps.nodes)
+    e = np.asarray(caps.edges).reshape(-1, 2)
+    pieces = connected_components(coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])),
+                                             shape=(n, n)), directed=False)[0]  # fmt: skip
+    assert len(lines.get_segments()) == n - pieces < len(e)
+    labels = [t.get_text() for t in drawn[1].axes[0].get_legend().get_texts()]
+    assert labels == ["H(k), Hausdorff distance to the map",
+                      "the rule's criterion (right axis)", "the refinement kept"]  # fmt: skip

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated
@@ -131,10 +132,12 @@ def evaluate_command(
     if not s["episodes"]:
         out.print(f"{output}: {chosen.method} ({sensing}, {where}): no episode ran{skipped}")
         return
+    excess = ("— (no success)" if math.isnan(s["excess_median"])
+              else f"{100 * s['excess_median']:.1f} %")  # fmt: skip
     out.print(
         f"{output}: {chosen.method} ({sensing}, {where}): {s['episodes']} episodes{skipped}, "
         f"success {100 * s['success']:.1f} %, collision {100 * s['contact']:.1f} %, timeout "
-        f"{100 * s['timeout']:.1f} %, median excess {100 * s['excess_median']:.1f} %, "
+        f"{100 * s['timeout']:.1f} %, median excess {excess}, "
         f"standing still {100 * s['no_policy']:.1f} %, unfamiliar "
         f"{100 * s['unfamiliar']:.1f} %, {s['decisions_per_s']:,.0f} decisions/s"
     )

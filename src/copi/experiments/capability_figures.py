@@ -62,8 +62,17 @@ def save_context_map(caps: Capabilities, out: Path) -> Path:
     ax = fig.add_subplot()
     from matplotlib.collections import LineCollection
 
-    segs = xy[caps.edges]
-    ax.add_collection(LineCollection(segs, colors="#bbbbbb", linewidths=0.3, zorder=1))
+    # All of the map's edges are a hairball (thousands); its minimum spanning tree over
+    # the readings' distances keeps the map's shape with one edge per node.
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import minimum_spanning_tree
+
+    e = np.asarray(caps.edges, dtype=np.int64).reshape(-1, 2)
+    weights = np.linalg.norm(nodes[e[:, 0]] - nodes[e[:, 1]], axis=1) + 1e-12
+    tree = minimum_spanning_tree(coo_matrix((weights, (e[:, 0], e[:, 1])),
+                                            shape=(len(nodes), len(nodes)))).tocoo()  # fmt: skip
+    segs = xy[np.stack([tree.row, tree.col], axis=1)]
+    ax.add_collection(LineCollection(segs, colors="#bbbbbb", linewidths=0.5, zorder=1))
     palette = _palette(len(caps.reduction.templates))
     colours = [palette[int(t)] for t in caps.node_template]
     ax.scatter(xy[:, 0], xy[:, 1], s=6, c=colours, zorder=2)
@@ -72,8 +81,8 @@ def save_context_map(caps: Capabilities, out: Path) -> Path:
         ax.scatter([x], [y], s=90, color=palette[t], edgecolors="black", linewidths=0.8, zorder=3)
         ax.annotate(str(j), (x, y), fontsize=6, ha="center", va="center", zorder=4)
     ax.set_title(
-        f"context map: {len(nodes)} nodes, {len(caps.edges)} edges -> "
-        f"{caps.landmarks.n_landmarks} landmarks (colour: template)",
+        f"context map: {len(nodes)} nodes ({len(caps.edges)} edges; drawn: their minimum "
+        f"spanning tree) -> {caps.landmarks.n_landmarks} landmarks (colour: template)",
         fontsize=9,
     )
     ax.set_xlabel("first principal axis of the readings")
@@ -91,7 +100,6 @@ def save_skeleton_curve(caps: Capabilities, out: Path) -> Path:
     ax = fig.add_subplot()
     k = np.arange(len(lm.curve))
     ax.plot(k, lm.curve, color="#1f77b4", lw=1.2, label="H(k), Hausdorff distance to the map")
-    ax.axvline(lm.k, color="#d62728", lw=1, ls="--")
     ax.annotate(
         f"k = {lm.k}\n{lm.n_landmarks} landmarks",
         (lm.k, lm.curve[lm.k]),
@@ -103,9 +111,13 @@ def save_skeleton_curve(caps: Capabilities, out: Path) -> Path:
     ax.set_xlabel("contractions k")
     ax.set_ylabel("H(k), agent steps")
     twin = ax.twinx()
-    twin.plot(k, lm.criterion, color="#7f7f7f", lw=0.6, alpha=0.6)
-    twin.set_ylabel("criterion maximised", color="#7f7f7f")
-    ax.legend(loc="upper left", fontsize=8)
+    (crit,) = twin.plot(k, lm.criterion, color="#7f7f7f", lw=0.6, alpha=0.6,
+                        label="the rule's criterion (right axis)")  # fmt: skip
+    twin.set_ylabel("criterion", color="#7f7f7f")
+    chosen = ax.axvline(lm.k, color="#d62728", lw=1, ls="--", label="the refinement kept")
+    handles, labels = ax.get_legend_handles_labels()
+    ax.legend([*handles[:1], crit, chosen], [labels[0], crit.get_label(), chosen.get_label()],
+              loc="upper left", fontsize=8)  # fmt: skip
     fig.tight_layout()
     target = out / "fig1_skeleton_curve.png"
     save_figure(fig, target)

@@ -43,6 +43,17 @@ def warnings_for(method: str, s: dict[str, Any]) -> list[str]:
     """Plain warnings for a run whose agent mostly stood still or saw unfamiliar contexts
     (e.g. capabilities taken to a world unlike the ones they were learnt in)."""
     out = []
+    if s.get("episodes", 0) and s.get("success") == 0.0:
+        hints = []
+        if s.get("timeout", 0.0) >= 0.5:
+            hints.append("most episodes timed out: a method that cannot find its way "
+                         "(copi-faithful has no escape: try the default learnt preset, "
+                         "copi learn without --preset) or a step limit too low (--max-steps)")
+        if s.get("contact", 0.0) >= 0.5:
+            hints.append("most episodes ended in a collision: try a method that avoids "
+                         "moving obstacles (copi-learnt, compass-guard, dwa)")
+        out.append(f"{method}: no episode succeeded" + (f"; {'; '.join(hints)}" if hints else
+                                                        ""))  # fmt: skip
     if s.get("no_policy", 0.0) > STILL_WARNING:
         out.append(
             f"{method} commanded no motion in {100 * s['no_policy']:.0f} % of steps: for "

@@ -16,7 +16,7 @@ from numba import njit
 from numpy.typing import NDArray
 
 from copi.geometry import clearance
-from copi.planning._kernels import _heap_pop, _heap_push
+from copi.planning._kernels import _heap_pop, _heap_push, _heap_room
 from copi.world import World
 
 __all__ = ["GoalField"]
@@ -62,14 +62,7 @@ def _dijkstra(free, gi, gj, h, out):  # type: ignore[no-untyped-def]
                 nd = d + step
                 if nd < out[a, b]:
                     out[a, b] = nd
-                    if size == cap:
-                        cap *= 2
-                        k2 = np.empty(cap)
-                        i2 = np.empty(cap, dtype=np.int64)
-                        k2[:size] = keys[:size]
-                        i2[:size] = items[:size]
-                        keys = k2
-                        items = i2
+                    keys, items = _heap_room(keys, items, size)
                     size = _heap_push(keys, items, size, nd, a * nx + b)
 
 

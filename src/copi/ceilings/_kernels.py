@@ -20,7 +20,7 @@ from numba import njit, types
 from numba.typed import Dict
 
 from copi.ceilings._field import field_at
-from copi.geometry._kernels import _closest_approach, _sweep_one
+from copi.geometry._kernels import _closest_approach, _sweep_one, point_segment_d2
 from copi.planning._kernels import _heap_pop, _heap_push
 
 # A move must clear every wall and disc by this much more than the simulator demands, so
@@ -47,16 +47,7 @@ def local_segments(x, y, segs, reach):  # type: ignore[no-untyped-def]
     keep = np.empty(segs.shape[0], dtype=np.int64)
     r2 = reach * reach
     for k in range(segs.shape[0]):
-        px = segs[k, 0]
-        py = segs[k, 1]
-        ex = segs[k, 2] - px
-        ey = segs[k, 3] - py
-        ll = ex * ex + ey * ey
-        u = ((x - px) * ex + (y - py) * ey) / ll if ll > 0.0 else 0.0
-        u = min(max(u, 0.0), 1.0)
-        cx = px + u * ex - x
-        cy = py + u * ey - y
-        if cx * cx + cy * cy <= r2:
+        if point_segment_d2(x, y, segs, k) <= r2:
             keep[n] = k
             n += 1
     out = np.empty((n, 4))

@@ -217,19 +217,25 @@ def move(positions, velocities, segs, r, out):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True, inline="always")
+def point_segment_d2(x, y, segs, k):  # type: ignore[no-untyped-def]
+    """Squared distance from (x, y) to segment k of ``segs`` (rows x0, y0, x1, y1)."""
+    px = segs[k, 0]
+    py = segs[k, 1]
+    ex = segs[k, 2] - px
+    ey = segs[k, 3] - py
+    ll = ex * ex + ey * ey
+    u = ((x - px) * ex + (y - py) * ey) / ll if ll > 0.0 else 0.0
+    u = min(max(u, 0.0), 1.0)
+    cx = px + u * ex - x
+    cy = py + u * ey - y
+    return cx * cx + cy * cy
+
+
+@njit(cache=True, inline="always")
 def _clearance_one(x, y, segs):  # type: ignore[no-untyped-def]
     best = np.inf
     for k in range(segs.shape[0]):
-        px = segs[k, 0]
-        py = segs[k, 1]
-        ex = segs[k, 2] - px
-        ey = segs[k, 3] - py
-        ll = ex * ex + ey * ey
-        u = ((x - px) * ex + (y - py) * ey) / ll if ll > 0.0 else 0.0
-        u = min(max(u, 0.0), 1.0)
-        cx = px + u * ex - x
-        cy = py + u * ey - y
-        d = cx * cx + cy * cy
+        d = point_segment_d2(x, y, segs, k)
         if d < best:
             best = d
     return math.sqrt(best)

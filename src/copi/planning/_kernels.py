@@ -41,6 +41,18 @@ def _heap_push(keys, items, size, key, item):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True, inline="always")
+def _heap_room(keys, items, size):  # type: ignore[no-untyped-def]
+    """(keys, items) with room for one more entry: the same arrays, or twice as large."""
+    if size < keys.shape[0]:
+        return keys, items
+    k2 = np.empty(2 * keys.shape[0])
+    i2 = np.empty(2 * keys.shape[0], dtype=np.int64)
+    k2[:size] = keys[:size]
+    i2[:size] = items[:size]
+    return k2, i2
+
+
+@njit(cache=True, inline="always")
 def _heap_pop(keys, items, size):  # type: ignore[no-untyped-def]
     key = keys[0]
     item = items[0]
@@ -119,14 +131,7 @@ def grid_astar(free, sx, sy, gx, gy, g, parent, stamp, query):  # type: ignore[n
                     g[v] = cand
                     parent[v] = u
                     stamp[v] = query
-                    if size == cap:
-                        cap *= 2
-                        k2 = np.empty(cap)
-                        i2 = np.empty(cap, dtype=np.int64)
-                        k2[:size] = keys[:size]
-                        i2[:size] = items[:size]
-                        keys = k2
-                        items = i2
+                    keys, items = _heap_room(keys, items, size)
                     size = _heap_push(keys, items, size, cand + _octile(vx, vy, gx, gy), v)
     return np.inf
 

@@ -85,3 +85,22 @@ def test_a_run_with_no_success_says_what_to_try(tmp_path: Path, capsys) -> None:
                            str(_room(tmp_path, 2.0)), "--worlds", "3", "-o",
                            str(tmp_path / "some.sqlite"), "--seed", "1"], capsys)  # fmt: skip
     assert code == 0 and "success 0.0 %" not in text and "no episode succeeded" not in err
+
+
+def test_a_door_the_mapping_grid_would_close_is_warned_of(tmp_path: Path, capsys) -> None:
+    """A door of 1.5 (2.5 agent diameters): open to the agent, but narrower than the
+    distance under which the mapping strategy joins walls; a door of 2.2 is not."""
+    from copi.online import Mapping
+    from copi.world import load_worlds
+
+    narrow, wide = _room(tmp_path, 1.5), _room(tmp_path, 2.2)
+    assert Mapping().closes_the_way(load_worlds(narrow)[0], [2, 5], [18, 5], 0.3)
+    assert not Mapping().closes_the_way(load_worlds(wide)[0], [2, 5], [18, 5], 0.3)
+    args = ["evaluate", "--method", "compass-guard", "--sensing", "sensor", "--worlds", "1",
+            "--sensor-strategy", "mapping", "--max-steps", "20"]  # fmt: skip
+    code, _, err = run([*args, "--world-file", str(narrow), "-o", str(tmp_path / "n.sqlite")],
+                       capsys)  # fmt: skip
+    assert code == 0 and "world 'door-1.5': the occupancy grid of the mapping strategy" in err
+    code, _, err = run([*args, "--world-file", str(wide), "-o", str(tmp_path / "w.sqlite")],
+                       capsys)  # fmt: skip
+    assert code == 0 and "occupancy grid" not in err

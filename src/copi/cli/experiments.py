@@ -107,6 +107,11 @@ def evaluate_command(
         from copi.world import load_worlds
 
         load_worlds(world_file)  # a bad file is refused before anything is written
+        if sensor_strategy == "mapping":
+            from copi.experiments.navigation import mapping_closes
+
+            for w in mapping_closes(world_file):
+                console.print(f"copi: warning: {w}", highlight=False, markup=False)
     from copi.experiments.methods import method_spec
 
     needs_caps = method_spec(chosen.method).capabilities is not None
@@ -229,6 +234,11 @@ def benchmark_command(
         from copi.experiments.navigation import check_world_file
 
         check_world_file(world_file)  # a bad file is refused before anything is written
+        if sensor_strategy == "mapping":
+            from copi.experiments.navigation import mapping_closes
+
+            for w in mapping_closes(world_file):
+                console.print(f"copi: warning: {w}", highlight=False, markup=False)
     else:
         for f in fams:
             family_inputs(f)  # a family's missing data is refused before anything is written

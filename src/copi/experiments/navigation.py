@@ -273,6 +273,33 @@ def draw_episode(
     return sim
 
 
+def mapping_closes(world_file: str | os.PathLike[str], agent_radius: float = 0.3,
+                   most: int = 100) -> list[str]:  # fmt: skip
+    """Warnings for the worlds of ``world_file`` (the first ``most``, those with a start
+    and a goal) whose every way the occupancy grid of the ``mapping`` strategy may close,
+    though the agent fits through (see :meth:`copi.online.Mapping.closes_the_way`)."""
+    from copi.online import Mapping
+    from copi.planning import shortest_path
+
+    grid = Mapping()
+    out = []
+    for world in load_worlds(world_file)[:most]:
+        if world.start is None or world.goal is None:
+            continue
+        if not grid.closes_the_way(world, world.start, world.goal, agent_radius):
+            continue
+        if not math.isfinite(shortest_path(world, world.start, world.goal,
+                                           radius=agent_radius).length):  # fmt: skip
+            continue  # closed for the agent too: skipped as no task, said then
+        out.append(
+            f"world {world.name!r}: the occupancy grid of the mapping strategy joins walls "
+            f"nearer than {grid.join:g} to each other into one, which may close every way "
+            "from the start to the goal (a passage narrower than that): expect timeouts "
+            "there with --sensor-strategy mapping; greedy, or level map, keep it open"
+        )
+    return out
+
+
 @lru_cache(maxsize=64)
 def _check_reachable(
     path: str, sha: str, index: int, radius: float, start: tuple, goal: tuple

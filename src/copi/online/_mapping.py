@@ -118,6 +118,54 @@ class Mapping:
         self.age = 0
         self.plans = 0
 
+    def closes_the_way(self, world: Any, start: Any, goal: Any, agent_radius: float) -> bool:
+        """Whether this strategy's grid, with every wall of ``world`` seen (its cells
+        occupied, grown by the agent's radius and the margin as planning grows them),
+        leaves no way from ``start`` to ``goal`` — a door the exact planner passes may be
+        closed by the grid's cells (``copi evaluate`` and ``benchmark`` warn of it)."""
+        from scipy.ndimage import label
+
+        x0, y0, x1, y1 = world.bounds
+        nx = int(math.ceil((x1 - x0) / self.cell)) + 1
+        ny = int(math.ceil((y1 - y0) / self.cell)) + 1
+        occ = np.zeros((ny, nx), dtype=bool)
+        for ax, ay, bx, by in world.segments:
+            k = int(math.ceil(math.hypot(bx - ax, by - ay) / (0.25 * self.cell))) + 1
+            t = np.linspace(0.0, 1.0, k)
+            i = np.floor((ay + t * (by - ay) - y0) / self.cell).astype(np.int64)
+            j = np.floor((ax + t * (bx - ax) - x0) / self.cell).astype(np.int64)
+            occ[np.clip(i, 0, ny - 1), np.clip(j, 0, nx - 1)] = True
+        # Hits of neighbouring rays nearer than ``join`` are joined into a wall, so two
+        # walls nearer than that (a door seen at a slant) may be joined across the gap:
+        # join every two wall points that near, as the worst view would.
+        from scipy.spatial import cKDTree
+
+        pts = []
+        for ax, ay, bx, by in world.segments:
+            k = int(math.ceil(math.hypot(bx - ax, by - ay) / (0.5 * self.cell))) + 1
+            t = np.linspace(0.0, 1.0, k)[:, None]
+            pts.append(np.hstack([ax + t * (bx - ax), ay + t * (by - ay)]))
+        wall = np.concatenate(pts)
+        pairs = cKDTree(wall).query_pairs(self.join, output_type="ndarray")
+        if len(pairs):
+            t = np.linspace(0.0, 1.0, int(math.ceil(self.join / (0.25 * self.cell))) + 1)
+            a, b = wall[pairs[:, 0]], wall[pairs[:, 1]]
+            line = a[:, None, :] + t[None, :, None] * (b - a)[:, None, :]
+            i = np.floor((line[..., 1] - y0) / self.cell).astype(np.int64)
+            j = np.floor((line[..., 0] - x0) / self.cell).astype(np.int64)
+            occ[np.clip(i, 0, ny - 1), np.clip(j, 0, nx - 1)] = True
+        grow = int(math.ceil((agent_radius + self.margin) / self.cell))
+        yy, xx = np.mgrid[-grow : grow + 1, -grow : grow + 1]
+        disc = (xx * xx + yy * yy) * self.cell**2 <= (agent_radius + self.margin) ** 2
+        free = ~binary_dilation(occ, structure=disc)
+        cells = [(int((p[1] - y0) // self.cell), int((p[0] - x0) // self.cell))
+                 for p in (np.asarray(start, float), np.asarray(goal, float))]  # fmt: skip
+        for i, j in cells:
+            free[min(max(i, 0), ny - 1), min(max(j, 0), nx - 1)] = True
+        parts, _ = label(free, structure=np.ones((3, 3), dtype=bool))
+        (si, sj), (gi, gj) = cells
+        return bool(parts[si, sj] != parts[gi, gj] or parts[si, sj] == 0)
+
     # -- the grid ---------------------------------------------------------------------
 
     def _index(self, p: NDArray[np.float64]) -> NDArray[np.int64]:

@@ -60,6 +60,12 @@ def test_baselines_say_their_name_and_the_gif_has_every_frame(tmp_path: Path) ->
     w = watch_episode("straight", world_file=worlds, max_steps=12)
     assert w.sim.world.name == "u-trap" and w.sensing == "map"
     assert all(s.text.startswith("straight: ") for s in w.steps)
+    # the global direction it followed, on the second line (straight heads along it)
+    for s in w.steps:
+        line = s.text.split("\n")[1]
+        assert line.startswith("global direction ")
+        if "stays put" not in s.text:
+            assert line.split()[-2] == s.text.split("heading ")[1].split()[0]
     gif = save_watch(w, tmp_path / "ep.gif", size=160)
     with Image.open(gif) as im:
         assert im.n_frames == w.n_frames == w.outcome.steps + 1

@@ -73,7 +73,9 @@ class Steered(Agent):
     def act(self, obs: Observation) -> NDArray[np.float64]:
         desired, reach = self.steering.aim(obs)
         obs = self.steering.observe(obs)
-        return self.steer(obs, np.asarray(desired, dtype=np.float64), float(reach))
+        self.last_direction = np.asarray(desired, dtype=np.float64)
+        """The global direction of the last decision (copi watch shows it)."""
+        return self.steer(obs, self.last_direction, float(reach))
 
     def steer(
         self, obs: Observation, desired: NDArray[np.float64], reach: float

@@ -146,6 +146,9 @@ class _Explaining(Agent):
                 if speed > 1e-9
                 else f"{agent.name}: stays put"
             )
+            direction = getattr(agent, "last_direction", None)
+            if direction is not None and np.hypot(*direction[:2]) > 0:
+                text += f"\nglobal direction {_heading(direction)}"
             cands = np.zeros((0, 2))
         self.steps.append(Step(obs.ranges.copy(), np.array(action, dtype=float), text, cands))
         return action

@@ -71,7 +71,7 @@ def _verdict(a: dict[int, bool], b: dict[int, bool], who_a: str, who_b: str) -> 
 
 
 def run_benchmark(bench: Path, episodes: int, workers: int) -> None:
-    cmd = [sys.executable, "-m", "copi.cli.main", "benchmark", "-o", str(bench),
+    cmd = [sys.executable, "-m", "copi", "benchmark", "-o", str(bench),
            "--episodes", str(episodes), "--methods", ",".join(METHODS),
            "--workers", str(workers), "--against", "copi-learnt"]  # fmt: skip
     subprocess.run(cmd, check=True)
@@ -178,7 +178,7 @@ def main() -> None:
     t0 = time.perf_counter()
     run_benchmark(bench, a.episodes, a.workers)
     t_bench = time.perf_counter() - t0
-    groups, _, _ = read_benchmark(bench)
+    groups, _, _ = read_benchmark(bench / "benchmark.sqlite")
     caps = bench / "capabilities-learnt.npz"
     succ: dict[tuple[str, str, str], dict[int, bool]] = {}
     rate: dict[tuple[str, str, str], float] = {}

@@ -45,7 +45,7 @@ def _run(name: str, args: list[str], out: Path, steps: int) -> dict:
     policy = out / f"{name}.npz"
     if policy.is_file() and (out / f"{name}.json").is_file():
         return json.loads((out / f"{name}.json").read_text())
-    cmd = [sys.executable, "-m", "copi.cli.main", "rl", "train", "-o", str(policy), "--steps",
+    cmd = [sys.executable, "-m", "copi", "rl", "train", "-o", str(policy), "--steps",
            str(steps), "--checkpoints", str(out / f"{name}.ckpt"), *args]  # fmt: skip
     t0 = time.perf_counter()
     done = subprocess.run(cmd, capture_output=True, text=True)

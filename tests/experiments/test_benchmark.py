@@ -225,3 +225,38 @@ def test_intervals_are_printed_for_what_they_are() -> None:
     few = paired_difference([1, 0], [0, 0])
     assert _diff(few) == "+50.0 (n = 2, no interval)"
     assert _diff(paired_difference([], [])) == "—"
+
+
+def test_the_report_table_is_the_store(tmp_path: Path) -> None:
+    """Every success, collision and timeout cell of the report is the share of the stored
+    rows it says, and each Δ success the paired difference computed from those rows."""
+    import re
+
+    from copi.experiments.benchmark_report import read_benchmark
+
+    methods = tuple(parse_methods("straight@map,compass-guard@map,dwa@map"))
+    cfg = BenchmarkConfig(methods=methods, families=("crowd",), episodes=12)
+    run_benchmark(cfg, tmp_path / "b.sqlite", workers=1)
+    text = write_benchmark_report(tmp_path / "b.sqlite", tmp_path / "rep").read_text()
+    groups, _, _ = read_benchmark(tmp_path / "b.sqlite")
+    rows = {arm.method: r for arm, r in groups["crowd"].items()}
+    ref = {int(r["episode"]): r["outcome"] == "success" for r in rows["straight"]}
+    checked = 0
+    for line in text.splitlines():
+        m = re.match(r"\| \**([a-z-]+)\** \| map \| route \| (\d+) \| ([\d.]+) % \| ([\d.]+) % \| "
+                     r"([\d.]+) % \|", line)  # fmt: skip
+        if not m or m.group(1) not in rows:
+            continue
+        got = rows[m.group(1)]
+        n = len(got)
+        share = {o: 100 * sum(r["outcome"] == o for r in got) / n
+                 for o in ("success", "collision", "timeout")}  # fmt: skip
+        assert int(m.group(2)) == n == 12
+        assert [float(m.group(k)) for k in (3, 4, 5)] == [
+            round(share[o], 1) for o in ("success", "collision", "timeout")]
+        if m.group(1) != "straight":  # paired against the first method run
+            won = {int(r["episode"]): r["outcome"] == "success" for r in got}
+            d = paired_difference([won[k] for k in sorted(ref)], [ref[k] for k in sorted(ref)])
+            assert f"{round(100 * d.estimate, 1) + 0.0:+.1f} [" in line
+        checked += 1
+    assert checked == 3, text

@@ -131,14 +131,20 @@ def _num(x: float, fmt: str) -> str:
     return "—" if not math.isfinite(x) else format(x, fmt)
 
 
+def _signed(x: float) -> str:
+    """``x`` to one decimal with its sign, zero as +0.0 (never -0.0)."""
+    return f"{round(x, 1) + 0.0:+.1f}"
+
+
 def _diff(d: PairedDifference, scale: float = 100.0) -> str:
     if d.n == 0 or not math.isfinite(d.estimate):
         return "—"
+    est = _signed(scale * d.estimate)
     if d.n < MIN_PAIRS or not math.isfinite(d.low):
-        return f"{scale * d.estimate:+.1f} (n = {d.n}, no interval)"
+        return f"{est} (n = {d.n}, no interval)"
     if d.low == d.high:  # every resample the same: the pairs all differ alike
-        return f"{scale * d.estimate:+.1f} (all {d.n} pairs alike)"
-    return f"{scale * d.estimate:+.1f} [{scale * d.low:+.1f}, {scale * d.high:+.1f}]"
+        return f"{est} (all {d.n} pairs alike)"
+    return f"{est} [{_signed(scale * d.low)}, {_signed(scale * d.high)}]"
 
 
 def _pair(rows: list[Any], ref: list[Any]) -> tuple[PairedDifference, PairedDifference]:

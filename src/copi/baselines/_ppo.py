@@ -196,30 +196,37 @@ class PolicyWeights:
         return h
 
 
-@numba.njit(cache=True, fastmath=False)
+@numba.njit(cache=True, inline="always", fastmath={"reassoc", "contract", "nsz"})
+def _dot(w, h, cols):  # type: ignore[no-untyped-def]
+    s = 0.0
+    for j in range(cols):
+        s += w[j] * h[j]
+    return s
+
+
+@numba.njit(cache=True, fastmath={"reassoc", "contract", "nsz"})
 def _forward(flat, shapes, x, buf, out):  # type: ignore[no-untyped-def]
     """The actor's forward pass over packed layers (numba: a Python loop of numpy calls
-    costs ~2 us a layer, over the 10 us a decision may take)."""
+    costs ~2 us a layer, over the 10 us a decision may take). The sums are reassociated,
+    so that they vectorise: the last bits of a velocity change, not the decisions (tested
+    against the torch policy)."""
     m = x.shape[0]
-    for j in range(m):
-        buf[0, j] = x[j]
-    cur = 0
+    a = buf[0]
+    b = buf[1]
+    a[:m] = x
     off = 0
     nl = shapes.shape[0]
     for li in range(nl):
         rows = shapes[li, 0]
         cols = shapes[li, 1]
-        nxt = 1 - cur
+        bias = off + rows * cols
         for i in range(rows):
-            s = flat[off + rows * cols + i]
-            base = off + i * cols
-            for j in range(cols):
-                s += flat[base + j] * buf[cur, j]
-            buf[nxt, i] = math.tanh(s) if li < nl - 1 else s
+            s = flat[bias + i] + _dot(flat[off + i * cols : off + (i + 1) * cols], a, cols)
+            b[i] = math.tanh(s) if li < nl - 1 else s
         off += rows * cols + rows
-        cur = nxt
-    vx = min(1.0, max(-1.0, buf[cur, 0]))
-    vy = min(1.0, max(-1.0, buf[cur, 1]))
+        a, b = b, a
+    vx = min(1.0, max(-1.0, a[0]))
+    vy = min(1.0, max(-1.0, a[1]))
     n = math.hypot(vx, vy)
     if n > 1.0:
         vx /= n

@@ -178,7 +178,7 @@ def figure(policies: dict[str, dict], copi_val: dict[str, float], copi_samples: 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(8, 4.8))
+    fig, ax = plt.subplots(figsize=(11, 4.8))
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     for i, (name, info) in enumerate(sorted(policies.items())):
         curve = info["curve"]
@@ -191,10 +191,10 @@ def figure(policies: dict[str, dict], copi_val: dict[str, float], copi_samples: 
     ax.set_xlabel("learning samples (environment steps; copi: exploration and probes, no task)")
     ax.set_ylabel("success on validation episodes (%)")
     ax.set_title("Learning cost: PPO's curves against copi-learnt (stars), seed 1 episodes")
-    ax.legend(fontsize=7, ncol=2, loc="lower right")
+    ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5), frameon=False)
     ax.grid(alpha=0.3)
     fig.tight_layout()
-    fig.savefig(out, dpi=120)
+    fig.savefig(out, dpi=120, bbox_inches="tight")
     plt.close(fig)
 
 

@@ -15,7 +15,6 @@ bound, and the oracle against each method (paired, 95 % intervals).
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import subprocess
 import sys
@@ -23,6 +22,8 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from benchmarks._timing import kept_times  # noqa: E402
 
 METHODS = ["copi-learnt", "copi-extended", "compass-guard", "straight", "vfh", "dwa",
            "tangent-bug", "replan", "navground-hrvo", "navground-hl", "clairvoyant"]  # fmt: skip
@@ -56,16 +57,14 @@ def main() -> None:
 
     methods = [m for m in METHODS if method_spec(m).available()]
     # wall times of the runs that did the work (a rerun that only resumes keeps them)
-    timing_file = bench / "ceilings-timing.json"
-    timing = json.loads(timing_file.read_text()) if timing_file.is_file() else {}
+    measured = {}
     for key, eps, ms in (("methods", a.episodes, methods),
                          ("oracle", a.oracle_episodes, ["model-oracle"])):  # fmt: skip
         t0 = time.perf_counter()
         _bench(bench, eps, ms, a.workers)
         took = time.perf_counter() - t0
-        if key not in timing or took > 30:
-            timing[key] = {"seconds": round(took), "workers": a.workers}
-    timing_file.write_text(json.dumps(timing))
+        measured[key] = (took, {"seconds": round(took), "workers": a.workers})
+    timing = kept_times(bench / "ceilings-timing.json", measured)
     groups, _, _ = read_benchmark(bench / "benchmark.sqlite")
     lines = [
         "# Ceilings: every family against what is possible",

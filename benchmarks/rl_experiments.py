@@ -35,6 +35,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from benchmarks._timing import kept_times  # noqa: E402
+
 FAMILIES = ("star", "polygon", "indoor", "maps", "crowd")
 METHODS = ["copi-learnt", "compass-guard", "dwa", "ppo", "ppo-guard",
            *[f"ppo-{f}" for f in FAMILIES]]  # fmt: skip
@@ -50,24 +52,19 @@ def _success(rows: list) -> dict[int, bool]:
             if r["outcome"] != "skipped"}  # fmt: skip
 
 
-def _delta(a: dict[int, bool], b: dict[int, bool]) -> tuple[str, bool]:
-    """a − b in points on the common episodes, with its interval; and whether a wins."""
+def _compare(
+    a: dict[int, bool], b: dict[int, bool], who_a: str, who_b: str
+) -> tuple[str, str, bool]:
+    """a − b in points on the common episodes with its interval, who is better (named only
+    where the interval excludes 0), and whether a is."""
     from copi.experiments.benchmark_report import paired_difference
 
     common = sorted(set(a) & set(b))
     d = paired_difference([a[k] for k in common], [b[k] for k in common])
-    return (f"{100 * d.estimate:+.1f} [{100 * d.low:+.1f}, {100 * d.high:+.1f}]",
-            d.excludes_zero and d.estimate > 0)  # fmt: skip
-
-
-def _verdict(a: dict[int, bool], b: dict[int, bool], who_a: str, who_b: str) -> str:
-    from copi.experiments.benchmark_report import paired_difference
-
-    common = sorted(set(a) & set(b))
-    d = paired_difference([a[k] for k in common], [b[k] for k in common])
+    text = f"{100 * d.estimate:+.1f} [{100 * d.low:+.1f}, {100 * d.high:+.1f}]"
     if not d.excludes_zero:
-        return "neither (interval holds 0)"
-    return f"**{who_a}**" if d.estimate > 0 else f"**{who_b}**"
+        return text, "neither (interval holds 0)", False
+    return text, f"**{who_a}**" if d.estimate > 0 else f"**{who_b}**", d.estimate > 0
 
 
 def run_benchmark(bench: Path, episodes: int, workers: int) -> None:
@@ -228,16 +225,11 @@ def main() -> None:
             policies[f"ppo-{name}"] = json.loads(path.read_text())
     star_succ, star_rate = star_only(bench, a.episodes)
     # wall times of the runs that did the work (a rerun that only resumes keeps them)
-    timing_file = bench / "rl-timing.json"
-    timing = json.loads(timing_file.read_text()) if timing_file.is_file() else {}
-    if "bench" not in timing or t_bench > 30:
-        timing["bench"] = round(t_bench)
     t1 = time.perf_counter()
     games = play_games(caps, a.games, bench / "chauffeur-games.json")
     t_games = time.perf_counter() - t1
-    if "games" not in timing or t_games > 30:
-        timing["games"] = round(t_games)
-    timing_file.write_text(json.dumps(timing))
+    timing = kept_times(bench / "rl-timing.json",
+                        {"bench": (t_bench, round(t_bench)), "games": (t_games, round(t_games))})
     t_bench, t_games = timing["bench"], timing["games"]
     copi_val = copi_validation(caps, policies)
     samples, how = copi_cost(caps)
@@ -273,13 +265,13 @@ def main() -> None:
                 for m in ("copi-learnt", "compass-guard", "dwa", "straight", "ppo", "ppo-guard",
                           f"ppo-{fam}")
             ]  # fmt: skip
-            d, _ = _delta(c, p)
+            d, better, _ = _compare(c, p, "copi-learnt", f"ppo-{fam}")
             st = succ.get((fam, "straight", level))
-            d_st = _delta(p, st)[0] if st is not None else "—"
+            d_st = _compare(p, st, "", "")[0] if st is not None else "—"
             lines.append(
                 f"| {fam} | {level} | "
                 + " | ".join(cells)
-                + f" | {d} | {_verdict(c, p, 'copi-learnt', f'ppo-{fam}')} | {d_st} |"
+                + f" | {d} | {better} | {d_st} |"
             )
     lines += [
         "",
@@ -310,13 +302,13 @@ def main() -> None:
             p = succ.get((fam, "ppo-star", level))
             if c is None or p is None:
                 continue
-            d, won = _delta(c, p)
+            d, better, won = _compare(c, p, "copi-learnt", "ppo-star")
             wins_new += won and level == "map"
             lines.append(
                 f"| {fam} | {level} | {_pct(star_rate[fam, level])} | "
                 f"{_pct(rate[fam, 'ppo-star', level])} | "
                 f"{_pct(rate.get((fam, f'ppo-{fam}', level), math.nan))} | {d} | "
-                f"{_verdict(c, p, 'copi-learnt', 'ppo-star')} |"
+                f"{better} |"
             )
     lines += [
         "",
@@ -335,8 +327,8 @@ def main() -> None:
              "ppo-guard": "ppo-guard", "ppo-chauffeur": "ppo-chauffeur (trained for the game)",
              "compass-guard": "compass-guard"}  # fmt: skip
     for e in EVADERS:
-        d, _ = _delta(base, games[e]) if e != "learnt" else ("—", False)
-        better = _verdict(base, games[e], "copi-learnt", e) if e != "learnt" else ""
+        d, better, _ = _compare(base, games[e], "copi-learnt", e) if e != "learnt" else (
+            "—", "", False)
         lines.append(
             f"| {names[e]} | {_pct(float(np.mean(list(games[e].values()))))} | {d} | {better} |"
         )

@@ -55,6 +55,16 @@ def _load_capabilities(path: Path | None):  # type: ignore[no-untyped-def]
     return Capabilities.load(path)
 
 
+def _warn_if_mapping_closes(world_file: Path, sensor_strategy: str) -> None:
+    """Warn of the worlds whose every way the mapping strategy's grid may close."""
+    if sensor_strategy != "mapping":
+        return
+    from copi.experiments.navigation import mapping_closes
+
+    for w in mapping_closes(world_file):
+        console.print(f"copi: warning: {w}", highlight=False, markup=False)
+
+
 @app.command("evaluate")
 def evaluate_command(
     capabilities: Annotated[
@@ -107,11 +117,7 @@ def evaluate_command(
         from copi.world import load_worlds
 
         load_worlds(world_file)  # a bad file is refused before anything is written
-        if sensor_strategy == "mapping":
-            from copi.experiments.navigation import mapping_closes
-
-            for w in mapping_closes(world_file):
-                console.print(f"copi: warning: {w}", highlight=False, markup=False)
+        _warn_if_mapping_closes(world_file, sensor_strategy)
     from copi.experiments.methods import method_spec
 
     needs_caps = method_spec(chosen.method).capabilities is not None
@@ -234,11 +240,7 @@ def benchmark_command(
         from copi.experiments.navigation import check_world_file
 
         check_world_file(world_file)  # a bad file is refused before anything is written
-        if sensor_strategy == "mapping":
-            from copi.experiments.navigation import mapping_closes
-
-            for w in mapping_closes(world_file):
-                console.print(f"copi: warning: {w}", highlight=False, markup=False)
+        _warn_if_mapping_closes(world_file, sensor_strategy)
     else:
         for f in fams:
             family_inputs(f)  # a family's missing data is refused before anything is written

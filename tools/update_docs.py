@@ -25,6 +25,11 @@ RESULTS: list[tuple[str, str, str]] = [
      "crowds no method comes near it, and copi's learnt part does not yet beat the "
      "hand-written guard"),
     ("ceilings.md", "| indoor |", "Indoors, at level map, copi-learnt is the best method"),
+    ("benchmark-bounds.md#star", "| compass-guard | map |",
+     "**Where copi loses.** compass-guard — copi's hand-written guard with nothing learnt — "
+     "has more successes than copi-learnt (the reference of Δ) in the paper's own star "
+     "worlds at level map"),
+    ("benchmark-bounds.md#maps", "| compass-guard | map |", "and in the maps family"),
     ("rl.md", "| indoor | map |",
      "**Against deep RL.** PPO trained in the family it is tested on (2M steps), beside "
      "copi-learnt (learnt once, without any task); this PPO learnt little beyond following "
@@ -46,10 +51,17 @@ def _block(text: str, tag: str, body: str) -> str:
 
 def quoted_row(page: str, first: str) -> str:
     """The row of ``docs/page`` whose first cells are ``first`` (e.g. "| crowd | map |"),
-    under its table's header."""
+    under its table's header; ``page#section`` looks from the heading "## section" on."""
+    page, _, section = page.partition("#")
+    lines = (ROOT / "docs" / page).read_text().splitlines()
+    if section:
+        start = next((i for i, x in enumerate(lines) if x.startswith(f"## {section}")), None)
+        if start is None:
+            raise SystemExit(f"docs/{page}: no section {section!r}")
+        lines = lines[start:]
     header: list[str] = []
     previous = ""
-    for line in (ROOT / "docs" / page).read_text().splitlines():
+    for line in lines:
         if line.startswith("|") and not previous.startswith("|"):
             header = [line]
         elif line.startswith("|---"):
@@ -63,7 +75,8 @@ def quoted_row(page: str, first: str) -> str:
 def results_block() -> str:
     out = []
     for page, first, label in RESULTS:
-        out.append(f"{label} ([docs/{page}](docs/{page})):\n\n{quoted_row(page, first)}\n")
+        file = page.partition("#")[0]
+        out.append(f"{label} ([docs/{file}](docs/{file})):\n\n{quoted_row(page, first)}\n")
     return "\n".join(out)
 
 

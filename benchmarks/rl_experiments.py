@@ -364,6 +364,25 @@ def main() -> None:
     figure(policies, copi_val, samples, out.with_suffix(".png"))
     out.write_text("\n".join(lines) + "\n")
     print(f"wrote {out}")
+    print(f"wrote {write_bounds_page(bench, a, out.parent / 'benchmark-bounds.md')}")
+
+
+def write_bounds_page(bench: Path, a: argparse.Namespace, page: Path) -> Path:
+    """The store's whole benchmark report (every method, the bounds, the RL peers) as the
+    docs page ``page``, its figure beside it: the page the README and the analysis pages
+    quote from."""
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
+    from benchmark_page import write_page
+
+    command = (
+        f"`python benchmarks/ceilings.py --bench {a.bench} --episodes {a.episodes} "
+        f"--oracle-episodes 100`, `copi benchmark -o {a.bench} --episodes {a.episodes} "
+        f"--methods copi-faithful` and `python benchmarks/rl_experiments.py --bench {a.bench} "
+        f"--episodes {a.episodes} --games {a.games}` (seed 0; model-oracle on the first 100 "
+        "episodes)"
+    )
+    return write_page(bench, page, f"{a.episodes} episodes, with the bounds and the RL peers",
+                      command)  # fmt: skip
 
 
 if __name__ == "__main__":

@@ -35,7 +35,7 @@ def test_the_readme_is_short_and_its_links_exist() -> None:
     assert not missing, missing
 
 
-@pytest.mark.parametrize("page", ["README.md", "docs/concepts/pipeline.md"])
+@pytest.mark.parametrize("page", _tool().PAGES)
 def test_generated_blocks_are_what_the_tool_writes(page: str) -> None:
     """The methods table and the headline results are generated (never typed): a page
     that differs from what ``python tools/update_docs.py`` writes fails here."""
@@ -70,3 +70,34 @@ def test_the_quickstart_runs(page: str, tmp_path: Path, monkeypatch) -> None:
     (code,) = _python_blocks(ROOT / page)
     exec(compile(code, page, "exec"), {"__name__": "quickstart"})  # noqa: S102
     assert (tmp_path / "caps-learnt.npz").is_file()
+
+
+def test_a_quote_is_the_generated_pages_table_and_can_keep_rows() -> None:
+    tool = _tool()
+    source = (DOCS / "families.md").read_text()
+    table = tool.quoted_table("families.md#Statistics")
+    assert table.strip() in source and table.startswith("| family |")
+    star = tool.quoted_table("families.md#Statistics | rows: star")
+    assert star.splitlines()[:2] == table.splitlines()[:2]
+    assert [x.split("|")[1].strip() for x in star.splitlines()[2:]] == ["star"]
+    for bad in ("nowhere.md#x", "families.md#No such heading", "families.md#Statistics#9",
+                "families.md#Statistics | rows: nobody"):  # fmt: skip
+        with pytest.raises(SystemExit):
+            tool.quoted_table(bad)
+
+
+def _outside_generated_blocks(text: str) -> str:
+    return re.sub(r"<!-- (quote|methods|results)\b[^>]*-->.*?<!-- /\1 -->", "", text, flags=re.S)
+
+
+@pytest.mark.parametrize("page", ["README.md", "docs/analysis/benchmark.md",
+                                  "docs/analysis/experiments.md", "docs/index.md"])  # fmt: skip
+def test_no_results_table_is_typed_by_hand(page: str) -> None:
+    """A table with a measured number in it (a cell that is a number, a percentage or an
+    interval) lives only in a generated block, quoted from a generated page."""
+    text = _outside_generated_blocks((ROOT / page).read_text())
+    number = re.compile(r"^\s*\**[-+−]?\d[\d,.]*\s?%?\s*[▲▽]?\s*(\([^)]*\))?\**\s*$")
+    interval = re.compile(r"\[[-+−]?\d[\d.]*, [-+−]?\d")
+    typed = [line for line in text.splitlines() if line.startswith("|") and (
+        interval.search(line) or any(number.match(c) for c in line.strip("|").split("|")))]
+    assert not typed, f"{page} types results by hand: {typed[:3]}"

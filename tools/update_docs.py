@@ -5,7 +5,12 @@
 - between ``<!-- methods ... -->`` and ``<!-- /methods -->``: the registry's table of
   methods (:func:`copi.experiments.methods.methods_markdown`);
 - between ``<!-- results ... -->`` and ``<!-- /results -->`` (README only): the headline
-  rows, each quoted whole from the generated results page it names (``RESULTS`` below).
+  rows, each quoted whole from the generated results page it names (``RESULTS`` below);
+- between ``<!-- quote PAGE#SECTION -->`` and ``<!-- /quote -->`` (any page in ``PAGES``):
+  the first table under the heading ``SECTION`` of the generated page ``docs/PAGE``
+  (``PAGE#SECTION#N``: its N-th table, from 1), quoted whole; ``| rows: A, B`` after the
+  section keeps only the rows whose first cell is one of the methods named (the header
+  kept), so that the analysis pages never carry a results table typed by hand.
 
 ``tests/test_docs.py`` fails when a block differs from what this script would write.
 """
@@ -80,18 +85,70 @@ def results_block() -> str:
     return "\n".join(out)
 
 
+def _tables(lines: list[str]) -> list[list[str]]:
+    tables: list[list[str]] = []
+    previous = ""
+    for line in lines:
+        if line.startswith("|"):
+            if not previous.startswith("|"):
+                tables.append([])
+            tables[-1].append(line)
+        elif line.startswith("#") and tables:
+            break  # the next heading ends the section
+        previous = line
+    return tables
+
+
+def quoted_table(spec: str) -> str:
+    """The table ``PAGE#SECTION[#N][ | rows: A, B]`` names (see the module)."""
+    where, _, rows = spec.partition("|")
+    page, _, section = where.strip().partition("#")
+    section, _, nth = section.partition("#")
+    path = ROOT / "docs" / page
+    if not path.is_file():
+        raise SystemExit(f"quote {spec!r}: no docs/{page}")
+    lines = path.read_text().splitlines()
+    start = next((i for i, x in enumerate(lines)
+                  if x.lstrip("#").strip().startswith(section) and x.startswith("#")), None)
+    if start is None:
+        raise SystemExit(f"quote {spec!r}: docs/{page} has no heading {section!r}")
+    tables = _tables(lines[start + 1:])
+    index = int(nth or 1) - 1
+    if index >= len(tables):
+        raise SystemExit(f"quote {spec!r}: docs/{page}#{section} has {len(tables)} table(s)")
+    table = tables[index]
+    if rows.strip():
+        keep = [r.strip() for r in rows.strip().removeprefix("rows:").split(",")]
+        body = [x for x in table[2:] if x.split("|")[1].strip().strip("*") in keep]
+        if not body:
+            raise SystemExit(f"quote {spec!r}: no row of {keep}")
+        table = table[:2] + body
+    return "\n".join(table) + "\n"
+
+
+def _quotes(text: str) -> str:
+    pattern = re.compile(r"(<!-- quote ([^>]*?) -->\n).*?(<!-- /quote -->)", re.S)
+    return pattern.sub(lambda m: m.group(1) + "\n" + quoted_table(m.group(2)) + "\n" + m.group(3), text)
+
+
+PAGES = ("README.md", "docs/concepts/pipeline.md", "docs/analysis/benchmark.md",
+         "docs/analysis/experiments.md")  # fmt: skip
+"""The pages with generated blocks."""
+
+
 def generated(path: Path) -> str:
     from copi.experiments.methods import methods_markdown
 
     text = path.read_text()
-    text = _block(text, "methods", methods_markdown())
+    if "<!-- methods" in text:
+        text = _block(text, "methods", methods_markdown())
     if "<!-- results" in text:
         text = _block(text, "results", results_block())
-    return text
+    return _quotes(text)
 
 
 def main() -> None:
-    for rel in ("README.md", "docs/concepts/pipeline.md"):
+    for rel in PAGES:
         path = ROOT / rel
         path.write_text(generated(path))
         print(f"wrote {rel}")

@@ -189,6 +189,76 @@ def _order(arm: MethodRun, known: dict[str, int]) -> tuple[int, str, int, str]:
             arm.strategy)  # fmt: skip
 
 
+_NO_DIFF = PairedDifference(math.nan, math.nan, math.nan, 0)
+
+
+def _reference_arm(reference: str, arm: MethodRun) -> MethodRun:
+    """The reference's arm a row is paired with: the same level and strategy; oracle and
+    future rows with its ``map`` row."""
+    level = arm.sensing if arm.sensing in ("sensor", "map") else "map"
+    return MethodRun(reference, level,  # type: ignore[arg-type]
+                     arm.strategy if level == "sensor" else "route")  # fmt: skip
+
+
+def _label(method: str, reference: str) -> str:
+    if _is_bound(method):
+        return f"*{method}* (bound)"
+    return f"**{method}**" if method == reference else method
+
+
+def _overview(
+    families: list[str],
+    table: dict[str, dict[MethodRun, dict[str, Any]]],
+    diffs: dict[str, dict[MethodRun, tuple[PairedDifference, PairedDifference] | None]],
+    reference: str,
+    known: dict[str, int],
+) -> list[str]:
+    """The report's first tables, one row per arm and one column per family: success with
+    its median excess, marked against the reference, then the paired Δ success itself
+    (the analysis pages quote these; every cell is read from the family tables' data)."""
+    arms = sorted({a for f in families for a in table[f]}, key=lambda a: _order(a, known))
+    head = "| method | sensing | strategy | " + " | ".join(map(_family_title, families)) + " |"
+    rule = "|---|---|---|" + "---|" * len(families)
+    success = [head, rule]
+    delta = [head, rule]
+    for arm in arms:
+        cells, deltas = [], []
+        for family in families:
+            s = table[family].get(arm)
+            pair = diffs[family].get(arm)
+            if s is None:
+                cells.append("")
+                deltas.append("")
+                continue
+            mark = ""
+            if pair is not None and pair[0].excludes_zero and pair[0].n >= MIN_PAIRS:
+                mark = " ▲" if pair[0].estimate > 0 else " ▽"
+            ex = s["excess_median"]
+            cells.append(f"{_num(100 * s['success'], '.1f')}{mark} ({_num(100 * ex, '.0f')})")
+            deltas.append("reference" if pair is None else _diff(pair[0]))
+        label = f"| {_label(arm.method, reference)} | {arm.sensing} | {arm.strategy} | "
+        success.append(label + " | ".join(cells) + " |")
+        delta.append(label + " | ".join(deltas) + " |")
+    return [
+        "## Overview",
+        "",
+        f"Success in % (median excess in %); ▲ / ▽: more / fewer successes than {reference} at "
+        "the same level and strategy (oracle and future rows: its `map` row), the paired 95 % "
+        "interval excluding zero. Each family's table below gives n, the other outcomes and "
+        "the intervals.",
+        "",
+        *success,
+        "",
+        "### Δ success against " + reference,
+        "",
+        f"The row's success minus {reference}'s on the same episodes, in points, with 95 % "
+        "bootstrap intervals.",
+        "",
+        *delta,
+        "",
+    ]
+
+
 def _family_title(family: str) -> str:
     return f"worlds of {family[5:]}" if family.startswith("file:") else family
 
@@ -342,10 +412,24 @@ def write_benchmark_report(
         "not their future).",
         "",
     ]
+    diffs: dict[str, dict[MethodRun, tuple[PairedDifference, PairedDifference] | None]] = {}
     for family in families:
         g = groups[family]
         arms = sorted(g, key=lambda a: _order(a, known))
         table[family] = {a: summarize_rows(g[a]) for a in arms}
+        diffs[family] = {}
+        for arm in arms:
+            ref_arm = _reference_arm(reference, arm)
+            ref = g.get(ref_arm)
+            diffs[family][arm] = (
+                None if arm == ref_arm else _pair(g[arm], ref) if ref is not None
+                else (_NO_DIFF, _NO_DIFF)
+            )  # fmt: skip
+    if len(families) > 1:
+        lines += _overview(families, table, diffs, reference, known)
+    for family in families:
+        g = groups[family]
+        arms = list(table[family])
         counts = {s["n"] for s in table[family].values()}
         n = max(counts)
         extent = f"{n} episodes" if len(counts) == 1 else f"up to {n} episodes; n per row"
@@ -366,23 +450,16 @@ def write_benchmark_report(
         ]
         for arm in arms:
             s = table[family][arm]
-            ref_level = arm.sensing if arm.sensing in ("sensor", "map") else "map"
-            ref_arm = MethodRun(reference, ref_level,  # type: ignore[arg-type]
-                                arm.strategy if ref_level == "sensor" else "route")  # fmt: skip
-            ref = g.get(ref_arm)
-            d_s = d_e = PairedDifference(math.nan, math.nan, math.nan, 0)
-            if ref is not None and arm != ref_arm:
-                d_s, d_e = _pair(g[arm], ref)
-            label = f"**{arm.method}**" if arm.method == reference else arm.method
-            if _is_bound(arm.method):
-                label = f"*{arm.method}* (bound)"
+            pair = diffs[family][arm]
+            d_s, d_e = pair if pair is not None else (_NO_DIFF, _NO_DIFF)
+            label = _label(arm.method, reference)
             lines.append(
                 f"| {label} | {arm.sensing} | {arm.strategy} | {s['n']} | {_pct(s['success'])} "
                 f"| {_pct(s['collision'])} | {_pct(s['timeout'])} | {_pct(s['excess_median'])} "
                 f"| {_pct(s['excess_p90'])} | {_num(s['time_to_goal'], '.0f')} "
                 f"| {_num(s['clearance'], '.2f')} | {_num(s['turning'], '.0f')}° "
                 f"| {_num(s['decisions_per_s'], ',.0f')} | {_diff(d_s)} | {_diff(d_e)} "
-                f"| {'reference' if arm == ref_arm else verdict(d_s, d_e)} |"
+                f"| {'reference' if pair is None else verdict(d_s, d_e)} |"
             )
         lines.append("")
     fig = _figure_success_excess(table, out)

@@ -1,4 +1,5 @@
-"""Small timing helpers shared by the benchmarks: medians of repeated loops."""
+"""Small timing helpers shared by the benchmarks: medians of repeated loops, and what each
+benchmark printed, kept as Markdown (``RECORD``) for the page ``make bench`` writes."""
 
 from __future__ import annotations
 
@@ -11,6 +12,27 @@ from typing import Any
 
 from rich.console import Console
 from rich.table import Table
+
+RECORD: list[str] = []
+"""Every table and line the benchmarks printed, as Markdown, in order (benchmarks/run.py
+writes them to docs/speed-run.md)."""
+
+
+def show(title: str, columns: list[str], rows: list[list[str]]) -> None:
+    """Print a table (rich) and record it (Markdown, under the heading ``title``)."""
+    table = Table(*columns, title=title)
+    for r in rows:
+        table.add_row(*r)
+    Console(width=110).print(table)
+    RECORD.extend([f"### {title}", "", "| " + " | ".join(columns) + " |",
+                   "|" + "---|" * len(columns), *("| " + " | ".join(r) + " |" for r in rows),
+                   ""])  # fmt: skip
+
+
+def note(text: str) -> None:
+    """Print a line and record it."""
+    print(text)
+    RECORD.extend([text.strip(), ""])
 
 
 @dataclass(frozen=True)
@@ -44,8 +66,8 @@ def report(title: str, rows: list[Timing], reference: str | None, goals: dict[st
     checks; returns whether every goal (name -> max seconds per item) was met."""
     ref = next((r for r in rows if r.name == reference), None)
     cols = ["method", "per item"] + ([f"× vs {reference}"] if ref else []) + ["goal"]
-    table = Table(*cols, title=title)
     ok = True
+    cells = []
     for r in rows:
         goal = goals.get(r.name)
         verdict = ""
@@ -54,8 +76,8 @@ def report(title: str, rows: list[Timing], reference: str | None, goals: dict[st
             ok &= met
             verdict = f"{'met' if met else 'MISSED'} (≤ {fmt(goal)})"
         speedup = [f"{ref.per_item / r.per_item:,.1f}"] if ref else []
-        table.add_row(r.name, fmt(r.per_item), *speedup, verdict)
-    Console(width=110).print(table)
+        cells.append([r.name, fmt(r.per_item), *speedup, verdict])
+    show(title, cols, cells)
     return ok
 
 

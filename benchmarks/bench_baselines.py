@@ -14,10 +14,8 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
-from rich.console import Console
-from rich.table import Table
 
-from benchmarks._timing import Timing, fmt
+from benchmarks._timing import Timing, fmt, show
 from copi.experiments._episode import optimal_to_goal, run_episode
 from copi.experiments.benchmark import benchmark_max_steps, ensure_capabilities
 from copi.experiments.methods import make_agent, method_names, method_spec
@@ -44,11 +42,9 @@ def main() -> bool:
                                    max_steps=limit).decision_us)  # fmt: skip
         rows.append(Timing(f"{name} ({level})", float(np.median(costs)) * 1e-6))
     ref = next(r for r in rows if r.name == "copi-extended (map)")
-    table = Table("method (level)", "per decision", "× copi-extended's cost",
-                  title="decision cost per method (polygon, 20 episodes)")  # fmt: skip
-    for r in rows:
-        table.add_row(r.name, fmt(r.per_item), f"{r.per_item / ref.per_item:,.1f}")
-    Console(width=110).print(table)
+    show("decision cost per method (polygon, 20 episodes)",
+         ["method (level)", "per decision", "× copi-extended's cost"],
+         [[r.name, fmt(r.per_item), f"{r.per_item / ref.per_item:,.1f}"] for r in rows])
     return True
 
 

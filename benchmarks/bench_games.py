@@ -6,6 +6,7 @@ import tempfile
 import time
 from pathlib import Path
 
+from benchmarks._timing import note
 from copi.experiments.pursuit import PursuitConfig, run_game
 from copi.learning import LearnParams, learn
 
@@ -20,7 +21,7 @@ def main() -> bool:
         rows = [run_game(cfg, k) for k in range(40)]
         wall = time.perf_counter() - t0
         steps = sum(r.survival for r in rows)
-        print(
+        note(
             f"{evader} evader, dynamic worlds: {len(rows) / wall:.1f} games/s, "
             f"{steps / wall:,.0f} game steps/s (one process)"
         )

@@ -16,7 +16,7 @@ import time
 import numpy as np
 from scipy.spatial.distance import cdist
 
-from benchmarks._timing import Timing, report
+from benchmarks._timing import Timing, note, report
 from copi.learning import GrowingNeuralGas, LearnParams, _gng_kernels, explore, learn, skeletonize
 from copi.learning._gng import signal_stream
 from copi.learning.reference import reference_gng
@@ -86,11 +86,11 @@ def main() -> bool:
             rows[3].name: 20.0,
         },
     )
-    print(f"GNG compile (or cache load): {compile_s:.2f} s, excluded above")
-    print(f"learn(): {caps.summary()}")
+    note(f"GNG compile (or cache load): {compile_s:.2f} s, excluded above")
+    note(f"learn(): {caps.summary()}")
     if not quick:
         rel = abs(qe / ref_qe - 1)
-        print(
+        note(
             f"quantisation error {qe:.6f} vs plain reference {ref_qe:.6f}: "
             f"{rel:.2e} relative (goal < 2 %)"
         )

@@ -18,6 +18,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+from benchmarks._timing import note
 from copi.experiments._episode import optimal_to_goal, run_episode
 from copi.experiments.benchmark import benchmark_max_steps
 from copi.experiments.lifelong import draw_life
@@ -91,15 +92,15 @@ def main() -> bool:
     plan_ms = causal["plan"].seconds / max(1, causal["plan"].calls) * 1e3
     whole = causal["aim"].seconds / n * 1e6
     grid = mapping["aim"].seconds / mapping["decisions"] * 1e6
-    print("causal map, one life (indoor world, 12 tasks, copi-learnt):")
-    print(f"  decisions {n}, options chosen {causal['choose'].calls}, "
+    note("causal map, one life (indoor world, 12 tasks, copi-learnt):")
+    note(f"  decisions {n}, options chosen {causal['choose'].calls}, "
           f"outcomes recorded {causal['record'].calls}, plans {causal['plan'].calls}")  # fmt: skip
     ok = update_choose <= GOAL_US
-    print(f"  update + choice: {update_choose:.1f} µs per decision ({per_option:.0f} µs per "
+    note(f"  update + choice: {update_choose:.1f} µs per decision ({per_option:.0f} µs per "
           f"option) (goal <= {GOAL_US:.0f} µs): {'met' if ok else 'NOT MET'}")  # fmt: skip
-    print(f"  inference (plausible options + value iteration): {plan_ms:.2f} ms per plan, "
+    note(f"  inference (plausible options + value iteration): {plan_ms:.2f} ms per plan, "
           f"{causal['plan'].seconds / n * 1e6:.0f} µs per decision amortised")  # fmt: skip
-    print(f"  whole causal strategy {whole:.0f} µs per decision vs mapping {grid:.0f} µs "
+    note(f"  whole causal strategy {whole:.0f} µs per decision vs mapping {grid:.0f} µs "
           f"({whole / grid:.2f}x)")  # fmt: skip
     return ok
 

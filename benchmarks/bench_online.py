@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from benchmarks._timing import Timing, median_time, report
+from benchmarks._timing import Timing, median_time, note, report
 from copi.experiments import NavigationConfig, evaluate
 from copi.learning import LearnParams, explore, learn
 from copi.online import ContextController, LearntAgent
@@ -129,7 +129,7 @@ def main() -> bool:
         evaluate(cfg, tmp / f"w{workers}.sqlite", workers=workers)
         walls[workers] = time.perf_counter() - t0
     speedup = walls[1] / walls[2]
-    print(
+    note(
         f"Experiment 1, 400 episodes: 1 worker {walls[1]:.1f} s, 2 workers {walls[2]:.1f} s, "
         f"speed-up {speedup:.2f}x (goal >= 1.8x)"
     )

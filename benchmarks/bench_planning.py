@@ -15,10 +15,8 @@ from pathlib import Path
 
 import numpy as np
 import shapely
-from rich.console import Console
-from rich.table import Table
 
-from benchmarks._timing import Timing, fmt, report
+from benchmarks._timing import Timing, fmt, note, report, show
 from copi.planning import VisibilityGraph, configuration_space, shortest_path
 from copi.planning._grid import GridPlanner
 from copi.planning.movingai import read_map, read_scenarios
@@ -101,17 +99,17 @@ def bench_snapshots() -> bool:
         {"copi shortest_path (radius 0.3, circles as 64-gons)": 30e-3},
     )
     if ratios:
-        print(
+        note(
             f"extremitypathfinder / copi on the same polygon: median {np.median(ratios):.0f}x "
             f"over {len(ratios)} snapshots, equal lengths (1e-6)"
         )
     else:
-        print("extremitypathfinder not installed: no ratio (pip install extremitypathfinder)")
+        note("extremitypathfinder not installed: no ratio (pip install extremitypathfinder)")
     return ok
 
 
 def bench_grid() -> None:
-    table = Table("map", "queries", "median per query", "mean per query", title="grid A*")
+    cells = []
     for rel, n in (("bg512/AR0011SR.map.scen", 400), ("maze/maze512-32-9.map.scen", 150)):
         scen = DATA / "movingai" / rel
         if not scen.exists():
@@ -124,8 +122,8 @@ def bench_grid() -> None:
             t0 = time.perf_counter()
             planner.shortest_path(s.start, s.goal)
             times.append(time.perf_counter() - t0)
-        table.add_row(rel, str(n), fmt(float(np.median(times))), fmt(float(np.mean(times))))
-    Console(width=110).print(table)
+        cells.append([rel, str(n), fmt(float(np.median(times))), fmt(float(np.mean(times)))])
+    show("grid A*", ["map", "queries", "median per query", "mean per query"], cells)
 
 
 def main() -> bool:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from benchmarks._timing import Timing, median_time, report
+from benchmarks._timing import Timing, median_time, note, report
 from copi.geometry import cast_rays
 from copi.geometry._kernels import scan
 from copi.geometry.reference import cast_rays_numpy, cast_rays_shapely
@@ -136,7 +136,7 @@ def bench_step_and_sampling() -> bool:
         None,
         {"env.step (NavigationEnv)": 50e-6, "random_world": 1e-3},
     )
-    print(f"env.step: {1 / rows[0].seconds:,.0f} steps/s (goal >= 20,000)")
+    note(f"env.step: {1 / rows[0].seconds:,.0f} steps/s (goal >= 20,000)")
     return ok
 
 

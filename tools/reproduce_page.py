@@ -41,8 +41,8 @@ def main() -> None:
         "# The paper's experiments, as `copi reproduce` reports them\n\n"
         f"<!-- generated: `copi reproduce -o results/` (seed 0{took}), then "
         "`python tools/reproduce_page.py results/` -->\n\n"
-        "The report `copi reproduce` writes, unchanged but for its headings' level and its figures' names; "
-        "[the experiments, read](analysis/experiments.md) explains it.\n\n"
+        "The report `copi reproduce` writes, unchanged but for its headings' level and its "
+        "figures' names; [the experiments, read](analysis/experiments.md) explains it.\n\n"
     )
     # the report's experiments become this page's sections
     text = re.sub(r"^# ", "## ", text, flags=re.M)

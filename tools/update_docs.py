@@ -128,11 +128,13 @@ def quoted_table(spec: str) -> str:
 
 def _quotes(text: str) -> str:
     pattern = re.compile(r"(<!-- quote ([^>]*?) -->\n).*?(<!-- /quote -->)", re.S)
-    return pattern.sub(lambda m: m.group(1) + "\n" + quoted_table(m.group(2)) + "\n" + m.group(3), text)
+    return pattern.sub(
+        lambda m: m.group(1) + "\n" + quoted_table(m.group(2)) + "\n" + m.group(3), text
+    )
 
 
 PAGES = ("README.md", "docs/concepts/pipeline.md", "docs/analysis/benchmark.md",
-         "docs/analysis/experiments.md")  # fmt: skip
+         "docs/analysis/experiments.md", "docs/speed.md", "docs/concepts/learning.md")  # fmt: skip
 """The pages with generated blocks."""
 
 

@@ -376,8 +376,7 @@ def write_bounds_page(bench: Path, a: argparse.Namespace, page: Path) -> Path:
 
     command = (
         f"`python benchmarks/ceilings.py --bench {a.bench} --episodes {a.episodes} "
-        f"--oracle-episodes 100`, `copi benchmark -o {a.bench} --episodes {a.episodes} "
-        f"--methods copi-faithful` and `python benchmarks/rl_experiments.py --bench {a.bench} "
+        f"--oracle-episodes 100` and `python benchmarks/rl_experiments.py --bench {a.bench} "
         f"--episodes {a.episodes} --games {a.games}` (seed 0; model-oracle on the first 100 "
         "episodes)"
     )

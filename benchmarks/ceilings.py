@@ -25,8 +25,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from benchmarks._timing import kept_times  # noqa: E402
 
-METHODS = ["copi-learnt", "copi-extended", "copi-faithful", "compass-guard", "straight", "vfh", "dwa",
-           "tangent-bug", "replan", "navground-hrvo", "navground-hl", "clairvoyant"]  # fmt: skip
+METHODS = ["copi-learnt", "copi-extended", "copi-faithful", "compass-guard", "straight", "vfh",
+           "dwa", "tangent-bug", "replan", "navground-hrvo", "navground-hl",
+           "clairvoyant"]  # fmt: skip
 FAMILIES = ("star", "polygon", "indoor", "maps", "crowd")
 
 

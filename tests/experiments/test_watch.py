@@ -75,6 +75,54 @@ def test_baselines_say_their_name_and_the_gif_has_every_frame(tmp_path: Path) ->
     assert watch_episode("replan", max_steps=3).sensing == "oracle"
 
 
+@pytest.mark.parametrize("method", ["compass-guard", "dwa", "vfh", "tangent-bug"])
+def test_every_local_method_shows_its_candidates_and_the_chosen_one_scores_best(
+    method: str,
+) -> None:
+    w = watch_episode(method, family="crowd", episode=3, max_steps=30)
+    shown = 0
+    for s in w.steps:
+        lines = s.text.split("\n")
+        assert lines[0].startswith(f"{method}: ") and lines[1].startswith("global direction ")
+        assert "candidates" in lines[2] and "score = " in lines[2]
+        if "; best: " in lines[2] and len(s.candidates) > 1 and np.hypot(*s.action) > 1e-9:
+            # the best candidate named first is the move made (same heading)
+            best = float(lines[2].split("; best: ")[1].split(" deg")[0])
+            made = np.degrees(np.arctan2(s.action[1], s.action[0])) % 360
+            assert abs((made - best + 180) % 360 - 180) < 1.0, (s.text, made)
+            shown += 1
+    assert shown, f"{method}: no step scored more than one candidate"
+
+
+def test_compass_guard_scores_are_the_kernels_own_verdicts() -> None:
+    """A move the guard refuses alone is refused among all: the chosen move is the
+    best-aligned one the explanation admits (or, when it admits none, an escape)."""
+    from copi.baselines import CompassGuard
+    from copi.core import Observation
+    from copi.experiments._episode import make_task
+    from copi.experiments.navigation import draw_episode
+
+    sim = draw_episode("crowd", 5, 0)
+    agent = CompassGuard()
+    agent.explain = True
+    agent.reset(make_task(sim, "map"))
+    refused_some = False
+    for _ in range(40):
+        pos = sim.position.copy()
+        obs = Observation(ranges=sim.ranges.copy(), goal=sim.goal - pos, position=pos,
+                          static=sim.sensor.scan(sim.world, pos))  # fmt: skip
+        action = agent.act(obs)
+        cands, scores, _ = agent.last_candidates
+        refused_some |= bool(np.isinf(scores).any())
+        if np.isfinite(scores).any():
+            best = cands[int(np.argmax(scores))]
+            assert np.allclose(action / np.hypot(*action), best, atol=1e-9)
+        res = sim.step(action)
+        if res.contact or res.reached:
+            break
+    assert refused_some
+
+
 def test_bad_inputs(caps, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
     with pytest.raises(InvalidArgumentError, match="copi-faithful needs a capabilities file"):
         watch_episode("copi-faithful")

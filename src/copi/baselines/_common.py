@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -58,6 +59,17 @@ class Steered(Agent):
 
     name = "steered"
     sensing = "sensor"
+    explain = False
+    """Keep each decision's candidates and their scores in :attr:`last_candidates`
+    (``copi watch`` sets it; off, a decision costs nothing more)."""
+    last_candidates: tuple[NDArray[np.float64], NDArray[np.float64], str] | None = None
+    """(candidate velocities (k, 2), their scores (k,), what a score measures): higher is
+    better, -inf a candidate the method refused; the last decision's, with ``explain``."""
+
+    def _explained(self, candidates: Any, scores: Any, what: str) -> None:
+        if self.explain:
+            self.last_candidates = (np.array(candidates, dtype=np.float64).reshape(-1, 2),
+                                    np.array(scores, dtype=np.float64).ravel(), what)  # fmt: skip
 
     def reset(self, task: Task) -> None:
         self.task = task

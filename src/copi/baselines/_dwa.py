@@ -101,8 +101,11 @@ class DWA(Steered):
         if ok.any():
             score = np.where(ok, score, -np.inf)
             best = int(np.argmax(score))
+            self._explained(vel, score, "progress + clearance; -inf: not admissible")
         else:
-            best = int(np.argmax(np.minimum(clear, touch + 1.0)))
+            room = np.minimum(clear, touch + 1.0)
+            best = int(np.argmax(room))
+            self._explained(vel, room, "clearance (none admissible: the clearest is taken)")
         return vel[best]
 
     def _clearance(

@@ -376,6 +376,8 @@ class PPOAgent(Steered):
         self._prev = np.array(obs.ranges, dtype=np.float64)
         v = to_world(self.policy.act(x), direction_frame(desired, self.policy.n_rays),
                      self.policy.n_rays)  # fmt: skip
+        self._explained(v[None], [0.0], "the policy's action (its mean; no candidates)"
+                        + (", then the guard's shield" if self.guard > 0 else ""))  # fmt: skip
         if self.guard <= 0:
             return v
         static = self._no_static if obs.static is None else obs.static

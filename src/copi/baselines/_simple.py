@@ -4,6 +4,7 @@ any learnt capability."""
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -26,6 +27,7 @@ class Straight(Steered):
         self, obs: Observation, desired: NDArray[np.float64], reach: float
     ) -> NDArray[np.float64]:
         u, _ = unit(desired)
+        self._explained(u[None], [1.0], "the global direction, the only candidate")
         return u * min(1.0, reach)
 
 
@@ -73,4 +75,19 @@ class CompassGuard(Steered):
             np.asarray(obs.ranges, dtype=np.float64), static, self._node, self._cand, self._ok,
             desired[0], desired[1], reach, self.guard, self.cos, self.sin, self.max_range, out,
         )  # fmt: skip
+        if self.explain:
+            self._explain_guard(obs, static, desired, reach)
         return out[:2].copy()
+
+    def _explain_guard(self, obs: Observation, static: Any, desired: Any, reach: float) -> None:
+        """Each compass move's alignment with the global direction, -inf where the guard
+        refuses it (the kernel's own test, :func:`copi.online._kernels.guard_verdicts`)."""
+        ranges = np.asarray(obs.ranges, dtype=np.float64)
+        u, _ = unit(desired)
+        dirs = np.ascontiguousarray(self._cand[0])
+        admitted = np.empty(len(dirs), dtype=np.bool_)
+        _kernels.guard_verdicts(ranges, static, dirs, float(desired[0]), float(desired[1]),
+                                reach, self.guard, self.cos, self.sin, self.max_range,
+                                admitted)  # fmt: skip
+        self._explained(dirs, np.where(admitted, dirs @ u, -np.inf),
+                        "alignment with the global direction; -inf: refused by the guard")

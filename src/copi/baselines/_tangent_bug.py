@@ -112,16 +112,26 @@ class TangentBug(Steered):
             if self._reach(ranges, g) < self._d_followed - 1e-6 or self._follow_steps > 400:
                 self.mode, self._best_h = "goal", math.inf
             else:
-                return self._follow(pts, g)
+                v = self._follow(pts, g)
+                self._explained(v[None], [0.0], "following the boundary: its one move")
+                return v
         if self._clear(pts, g):
+            self._explained(u[None], [0.0], "the goal in sight: straight at it")
             return u * min(1.0, float(np.hypot(*g)))
         ends = self._endpoints(ranges)
         if not len(ends):
-            return self._start_following(pts, g)
+            v = self._start_following(pts, g)
+            self._explained(v[None], [0.0], "no gap to aim for: boundary following begins")
+            return v
         h = np.hypot(*ends.T) + np.hypot(*(g[None] - ends).T)
         k = int(np.argmin(h))
+        if self.explain:
+            self._explained([unit(e)[0] for e in ends], -h,
+                            "minus the heuristic distance through each gap's endpoint")
         if h[k] > self._best_h + 1e-3:
-            return self._start_following(pts, g)
+            v = self._start_following(pts, g)
+            self._explained(v[None], [0.0], "no gap better than before: boundary following")
+            return v
         self._best_h = min(self._best_h, float(h[k]))
         v, _ = unit(ends[k])
         return v

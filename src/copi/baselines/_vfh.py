@@ -91,6 +91,7 @@ class VFH(Steered):
             return np.zeros(2)
         if reach < self.max_range and self._in_sight(ranges, u * reach):
             self._previous = math.atan2(u[1], u[0])
+            self._explained(u[None], [0.0], "the aim point in sight: straight at it")
             return u * min(1.0, reach)
         h = self.histogram(ranges)
         blocked = np.where(
@@ -102,10 +103,15 @@ class VFH(Steered):
             k = int(np.argmax(ranges))
             a = self._angles[k]
             self._previous = a
+            self._explained([[math.cos(a), math.sin(a)]], [0.0],
+                            "every sector blocked: along the longest ray, at half speed")
             return 0.5 * np.array([math.cos(a), math.sin(a)])
         cands = self._candidates(blocked, target)
         prev = target if self._previous is None else self._previous
         cost = 5.0 * np.abs(_wrap(cands - target)) + 2.0 * np.abs(_wrap(cands - prev))
+        if self.explain:
+            self._explained(np.column_stack([np.cos(cands), np.sin(cands)]), -cost,
+                            "minus the cost of turning from the target and the last heading")
         a = float(cands[int(np.argmin(cost))])
         self._previous = a
         k = int(round(a / _TWO_PI * self.sectors)) % self.sectors

@@ -16,6 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from copi._files import atomic_path
+from copi.baselines._common import Steered
 from copi.core import (
     SENSING_LEVELS,
     Agent,
@@ -139,6 +140,9 @@ class _Explaining(Agent):
             )
             cands = np.stack([np.cos(angles[seen]), np.sin(angles[seen])], axis=1)
         else:
+            local = agent if isinstance(agent, Steered) else None
+            if local is not None:  # a local method: its candidates, scored
+                local.explain = True
             action = np.asarray(agent.act(obs), dtype=np.float64)
             speed = math.hypot(action[0], action[1])
             text = (
@@ -150,6 +154,13 @@ class _Explaining(Agent):
             if direction is not None and np.hypot(*direction[:2]) > 0:
                 text += f"\nglobal direction {_heading(direction)}"
             cands = np.zeros((0, 2))
+            explained = local.last_candidates if local is not None else None
+            if explained is not None:
+                cands, scores, what = explained
+                text += f"\n{_scored(cands, scores, what)}"
+                cands = cands[np.isfinite(scores)]
+                if local is not None:
+                    local.last_candidates = None
         self.steps.append(Step(obs.ranges.copy(), np.array(action, dtype=float), text, cands))
         return action
 
@@ -158,6 +169,16 @@ class _Explaining(Agent):
 
     def counters(self) -> dict[str, Any]:
         return self.agent.counters()
+
+
+def _scored(cands: NDArray[np.float64], scores: NDArray[np.float64], what: str) -> str:
+    """One line: how many candidates, how many refused, the best three with scores."""
+    ok = np.isfinite(scores)
+    best = np.argsort(-np.where(ok, scores, -np.inf), kind="stable")[: min(3, int(ok.sum()))]
+    shown = ", ".join(f"{_heading(cands[i])} {scores[i]:.2f}" for i in best)
+    refused = f", {int((~ok).sum())} refused" if (~ok).any() else ""
+    return f"{len(scores)} candidates{refused}; score = {what}" + (
+        f"; best: {shown}" if shown else "")
 
 
 def _heading(v: Any) -> str:

@@ -165,6 +165,40 @@ def _escape(s, static, cos, sin, max_range, n, clear, roomy, out):  # type: igno
 
 
 @njit(cache=True, inline="always", fastmath=FAST)
+def _refused(s, static, cos, sin, max_range, ax, ay, score, reach, guard, wall):  # type: ignore[no-untyped-def]
+    """Whether the guard refuses the step along (ax, ay) (alignment ``score`` with the
+    desired direction): after it a moving hit nearer than ``guard``, or its path passing
+    one nearer than half of that, or running within ``wall`` of any hit (a wall
+    included; ``wall`` is below how near the nearest hit is now). A step so pressed would
+    be stopped there: without this, a quantised direction pressed into a wall corner for
+    good where the route hugs it. Returns (refused, end, sweep_all)."""
+    step = _step_length(score * reach, reach)
+    end, sweep, sweep_all = _room(s, static, cos, sin, max_range, ax, ay, step)
+    if guard <= 0.0:
+        end = np.inf
+        sweep = np.inf
+    return (end < guard or sweep < 0.5 * guard or sweep_all < wall), end, sweep_all
+
+
+@njit(cache=True)
+def guard_verdicts(s, static, dirs, wx, wy, reach, guard, cos, sin, max_range, out):  # type: ignore[no-untyped-def]
+    """out[k] = whether the guard admits the step along ``dirs[k]`` (unit vectors) for
+    reading ``s`` and desired direction (wx, wy): the test :func:`_choose` applies (for
+    explanations: ``copi watch``)."""
+    norm = math.sqrt(wx * wx + wy * wy)
+    now = np.inf
+    for i in range(s.shape[0]):
+        if s[i] < now:
+            now = s[i]
+    wall = min(_WALL, now - 1e-6)
+    for k in range(dirs.shape[0]):
+        score = (dirs[k, 0] * wx + dirs[k, 1] * wy) / norm if norm > 0.0 else 0.0
+        refused, _, _ = _refused(s, static, cos, sin, max_range, dirs[k, 0], dirs[k, 1],
+                                 score, reach, guard, wall)  # fmt: skip
+        out[k] = not refused
+
+
+@njit(cache=True, inline="always", fastmath=FAST)
 def _choose(  # type: ignore[no-untyped-def]
     s, static, node, d2, cand, ok, wx, wy, reach, guard, cos, sin, max_range, out
 ):
@@ -230,16 +264,9 @@ def _choose(  # type: ignore[no-untyped-def]
             continue
         score = ax * ux + ay * uy
         if guard > 0.0 or compass:
-            step = _step_length(score * reach, reach)
-            end, sweep, sweep_all = _room(s, static, cos, sin, max_range, ax, ay, step)
-            if guard <= 0.0:
-                end = np.inf
-                sweep = np.inf
-            # A step whose path runs within _WALL of any hit (a wall included), nearer
-            # than the agent already is, would be stopped there: without this, a
-            # quantised direction pressed into a wall corner for good where the route
-            # hugs it.
-            if end < guard or sweep < 0.5 * guard or sweep_all < wall:
+            refused, end, sweep_all = _refused(s, static, cos, sin, max_range, ax, ay,
+                                               score, reach, guard, wall)  # fmt: skip
+            if refused:
                 # a fallback may come near a moving obstacle, never run into a hit
                 if sweep_all >= wall and end > fallback_clear:
                     fallback_clear = end

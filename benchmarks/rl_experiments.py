@@ -109,6 +109,39 @@ def star_only(bench: Path, episodes: int) -> tuple[dict, dict]:
     return succ, rate
 
 
+SEEDS = Path(__file__).resolve().parents[1] / "src" / "copi" / "data" / "rl" / "seeds"
+"""The policies of the other training seeds (``ppo-F-sS.npz``, S >= 1), shipped so that
+the spread over seeds is measured without training (seed 0's are the benchmark's)."""
+
+
+def seed_spread(bench: Path, episodes: int) -> dict[tuple[str, int], dict[int, bool]]:
+    """Success per episode at level map of every shipped training seed's in-family policy
+    on the benchmark's episodes (seed 0's from the store), cached in ``bench``."""
+    from copi.baselines import PPOAgent
+    from copi.experiments import run_episode
+    from copi.experiments._episode import optimal_to_goal
+    from copi.experiments.benchmark import benchmark_max_steps
+    from copi.experiments.navigation import draw_episode
+
+    cache = bench / "rl-seeds.json"
+    done = json.loads(cache.read_text()) if cache.is_file() else {}
+    for path in sorted(SEEDS.glob("ppo-*-s*.npz")):
+        fam, seed = path.stem.removeprefix("ppo-").rsplit("-s", 1)
+        key = f"{fam}/{seed}"
+        if fam not in FAMILIES or len(done.get(key, {})) >= episodes:
+            continue
+        won = {}
+        for k in range(episodes):
+            sim = draw_episode(fam, k, 0)
+            limit = benchmark_max_steps(optimal_to_goal(sim))
+            out = run_episode(PPOAgent(weights=str(path)), sim, sensing="map", max_steps=limit)
+            won[str(k)] = out.outcome == "success"
+        done[key] = won
+        cache.write_text(json.dumps(done))
+    return {(key.split("/")[0], int(key.split("/")[1])): {int(k): v for k, v in w.items()}
+            for key, w in done.items()}  # fmt: skip
+
+
 def play_games(caps: Path, games: int, cache: Path) -> dict[str, dict[int, bool]]:
     """Survival per game of each evader (cached in ``cache``, a JSON file)."""
     from copi.experiments.pursuit import PursuitConfig, run_game
@@ -224,6 +257,7 @@ def main() -> None:
         if path.is_file():
             policies[f"ppo-{name}"] = json.loads(path.read_text())
     star_succ, star_rate = star_only(bench, a.episodes)
+    seeds = seed_spread(bench, a.episodes)
     # wall times of the runs that did the work (a rerun that only resumes keeps them)
     t1 = time.perf_counter()
     games = play_games(caps, a.games, bench / "chauffeur-games.json")
@@ -284,6 +318,17 @@ def main() -> None:
         "obstacles, which needs their positions: level oracle) may stand higher; these "
         "rows show what PPO reached on copi's factorisation in 2M steps, not what deep RL "
         "can do.",
+        "",
+        "## Training seeds (level map)",
+        "",
+        "Each in-family policy trained with other seeds (the same command, `--seed S`; "
+        "their weights ship in `src/copi/data/rl/seeds`), on the same episodes. Seed 0 is "
+        "the policy of every other table; mean and standard deviation over the seeds "
+        "trained; the last column: copi-learnt minus the seeds' mean success (points).",
+        "",
+        "| family | seeds | success per seed | mean ± sd | copi-learnt | copi-learnt − mean |",
+        "|---|---|---|---|---|---|",
+        *seed_rows(succ, seeds),
         "",
         "## A new world: both learnt on `star` only, tested on the others (level map, then sensor)",
         "",
@@ -365,6 +410,26 @@ def main() -> None:
     out.write_text("\n".join(lines) + "\n")
     print(f"wrote {out}")
     print(f"wrote {write_bounds_page(bench, a, out.parent / 'benchmark-bounds.md')}")
+
+
+def seed_rows(succ: dict, seeds: dict[tuple[str, int], dict[int, bool]]) -> list[str]:
+    """The rows of the training-seeds table (see :func:`seed_spread`)."""
+    rows = []
+    for fam in FAMILIES:
+        first = succ.get((fam, f"ppo-{fam}", "map"))
+        if first is None:
+            continue
+        per = {0: first, **{s: w for (f, s), w in seeds.items() if f == fam}}
+        rates = [100 * float(np.mean(list(per[s].values()))) for s in sorted(per)]
+        copi = 100 * float(np.mean(list(succ[(fam, "copi-learnt", "map")].values())))
+        mean = float(np.mean(rates))
+        sd = float(np.std(rates, ddof=1)) if len(rates) > 1 else math.nan
+        rows.append(
+            f"| {fam} | {', '.join(map(str, sorted(per)))} | "
+            f"{', '.join(f'{r:.1f} %' for r in rates)} | {mean:.1f} ± "
+            f"{'—' if math.isnan(sd) else f'{sd:.1f}'} | {copi:.1f} % | {copi - mean:+.1f} |"
+        )
+    return rows
 
 
 def write_bounds_page(bench: Path, a: argparse.Namespace, page: Path) -> Path:

@@ -6,7 +6,8 @@ Configurations: ``mix`` (all five families), one per family (in-family), and
 ``chauffeur`` (the game's evader), each over the seeds given, with the settings chosen on
 validation episodes (``--tune`` runs that choice: five settings on the mix, one seed).
 Each run is ``copi rl train`` with checkpoints, so an interrupted script resumes. The
-seed-0 policies are then copied into ``src/copi/data/rl`` by ``--install``.
+seed-0 policies are then copied into ``src/copi/data/rl`` by ``--install``, the other
+seeds' in-family ones into ``src/copi/data/rl/seeds``.
 """
 
 from __future__ import annotations
@@ -108,6 +109,15 @@ def _install(out: Path) -> None:
         summary["command"] = summary.get("command", "").replace(prefix, "results/rl/")
         (SHIPPED / f"ppo-{name}.json").write_text(json.dumps(summary, indent=1) + "\n")
         shutil.copy(out / f"ppo-{name}-s0.png", DOCS / f"rl-curve-{name}.png")
+    # the other seeds' in-family policies: the spread over training seeds (rl_experiments)
+    (SHIPPED / "seeds").mkdir(exist_ok=True)
+    for src in sorted(out.glob("ppo-*-s*.npz")):
+        name, seed = src.stem.removeprefix("ppo-").rsplit("-s", 1)
+        if seed == "0" or name not in FAMILIES or not (out / f"{src.stem}.json").is_file():
+            continue
+        policy = load_policy(src)
+        policy.info["command"] = policy.info.get("command", "").replace(prefix, "results/rl/")
+        save_policy(policy, SHIPPED / "seeds" / src.name)
     print(f"installed into {SHIPPED}")
 
 

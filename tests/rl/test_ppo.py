@@ -234,3 +234,20 @@ def test_the_frame_is_a_symmetry(angle: float) -> None:
         np.testing.assert_allclose(
             turned @ to_world(v, direction_frame(d, 32), 32),
             to_world(v, direction_frame(turned @ d, 32), 32), atol=1e-9)
+
+
+def test_every_shipped_policy_loads_and_says_how_it_was_trained() -> None:
+    """The weights copi ships (seed 0 for the benchmark, the other seeds for the spread)
+    pass the loader's checks, and each names the command that trained it, in the
+    repository's terms (no directory of the machine it ran on)."""
+    from copi.baselines._ppo import POLICIES, load_policy
+
+    files = sorted(POLICIES.glob("*.npz")) + sorted((POLICIES / "seeds").glob("*.npz"))
+    assert len(files) >= 7
+    for path in files:
+        command = load_policy(path).info.get("command", "")
+        assert command.startswith("copi rl train -o results/rl/ppo-"), (path.name, command)
+        assert " --steps 2000000 " in command and " --seed " in command
+        if path.parent.name == "seeds":
+            seed = path.stem.rsplit("-s", 1)[1]
+            assert command.endswith(f"--seed {seed}") and seed != "0"

@@ -70,6 +70,8 @@ def main() -> None:
     lines = [
         "# Ceilings: every family against what is possible",
         "",
+        "<!-- generated: written whole by benchmarks/ceilings.py -->",
+        "",
         f"`python benchmarks/ceilings.py --bench {a.bench} --episodes {a.episodes} "
         f"--oracle-episodes {a.oracle_episodes}` (benchmark seed 0; "
         f"{timing['methods']['seconds'] / 60:.0f} min for the methods and the clairvoyant, "

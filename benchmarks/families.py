@@ -2,7 +2,8 @@
 
     PYTHONPATH=src python benchmarks/families.py --n 200 --seed 0 --pictures docs
 
-prints the Markdown table of docs/families.md (``family_stats`` over n tasks per family)
+prints the Markdown table of docs/families.md (``family_stats`` over n tasks per family;
+``--into docs/families.md`` writes it between the page's ``<!-- table -->`` marks)
 and, with ``--pictures DIR``, writes ``DIR/family_<name>.png``: worlds 0 to 3 of each family
 for the seed, with the task and the obstacles that ``Simulator.from_world`` draws. Add
 ``--n 0`` for the pictures alone.
@@ -69,9 +70,20 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--families", nargs="*", default=list(FAMILIES))
     parser.add_argument("--pictures", type=Path, help="write family_<name>.png here")
+    parser.add_argument("--into", type=Path, help="write the table into this page's block")
     args = parser.parse_args()
     if args.n > 0:
-        print(table([family_stats(f, n=args.n, seed=args.seed) for f in args.families]))
+        text = table([family_stats(f, n=args.n, seed=args.seed) for f in args.families])
+        print(text)
+        if args.into is not None:
+            import re
+
+            page = args.into.read_text()
+            mark = re.compile(r"(<!-- table[^>]*-->\n).*?(<!-- /table -->)", re.S)
+            if not mark.search(page):
+                raise SystemExit(f"{args.into}: no <!-- table --> block")
+            args.into.write_text(mark.sub(lambda m: m.group(1) + "\n" + text.rstrip("\n")
+                                          + "\n\n" + m.group(2), page))  # fmt: skip
     if args.pictures is not None:
         for path in pictures(args.pictures, args.seed):
             print(path)

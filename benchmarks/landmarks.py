@@ -55,6 +55,8 @@ def main() -> None:
     lines = [
         f"# Landmarks over {a.seeds} seeds (`python benchmarks/landmarks.py --seeds {a.seeds}`)",
         "",
+        "<!-- generated: written whole by benchmarks/landmarks.py -->",
+        "",
         "Counts as landmarks (templates). The defaults of `copi learn --preset faithful`: "
         "100 worlds x 300 steps, the paper's setup (the paper: 593 nodes, 9 landmarks).",
         "",

@@ -61,7 +61,9 @@ def main() -> None:
             counts[rule][name] = f"{c.landmarks.n_landmarks} ({len(c.reduction.templates)})"
     lines = [
         "# The landmark rule downstream (`python benchmarks/landmarks_effect.py "
-        f"--episodes {a.episodes}`)",
+        f"--episodes {a.episodes} --seeds {a.seeds}`)",
+        "",
+        "<!-- generated: written whole by benchmarks/landmarks_effect.py -->",
         "",
         f"Learning seed {seeds[0]}, episodes of seed 0. Landmarks (templates): "
         + "; ".join(f"{n}: {counts['new'][n]} now, {counts['old'][n]} with copi 0.2's rule"

@@ -271,6 +271,8 @@ def main() -> None:
     lines = [
         "# copi against deep RL",
         "",
+        "<!-- generated: written whole by benchmarks/rl_experiments.py -->",
+        "",
         f"`python benchmarks/rl_experiments.py --bench {a.bench} --episodes {a.episodes} "
         f"--games {a.games}` ({t_bench / 60:.0f} min of benchmark, {t_games / 60:.0f} "
         "min of games, on 2 cores). Benchmark seed 0, episodes 0 .. "

@@ -113,6 +113,8 @@ def main() -> None:
         f"# Tuning (validation seed {SEED}, families {a.families}, {a.episodes} episodes "
         "each, level map; oracle for oracle methods)",
         "",
+        "<!-- generated: written whole by benchmarks/tune.py -->",
+        "",
         "| method | setting | success | collision | median excess | chosen | registered |",
         "|---|---|---|---|---|---|---|",
     ]

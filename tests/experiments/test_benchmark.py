@@ -124,6 +124,24 @@ def test_every_method_meets_the_same_episodes_and_runs_resume(
     assert "## star (6 episodes)" in text and "## indoor (4 episodes)" in text
     assert "| compass-guard | sensor | greedy | 6 |" in text
     assert (tmp_path / "rep" / "benchmark_success_excess.png").stat().st_size > 10_000
+    # the overview's cells are the family tables' success and median excess, row by row
+    overview = text.split("## Overview")[1].split("### Δ success")[0]
+    cells = {tuple(c.strip() for c in ln.strip("|").split("|")[:3]): ln.strip("|").split("|")[3:]
+             for ln in overview.splitlines() if ln.startswith("| ") and "---" not in ln
+             and not ln.startswith("| method")}  # fmt: skip
+    assert cells
+    for family, col in (("star", 0), ("indoor", 1)):
+        table = text.split(f"## {family} (")[1].split("\n## ")[0]
+        for ln in table.splitlines():
+            parts = [c.strip() for c in ln.strip("|").split("|")]
+            if len(parts) < 8 or parts[0] in ("method", "---") or parts[0].startswith("---"):
+                continue
+            success = parts[4].removesuffix(" %")
+            excess = parts[7].removesuffix(" %")
+            cell = cells[tuple(parts[:3])][col].strip()
+            assert cell.split()[0] == success, (family, parts[:3], cell)
+            if excess != "—":
+                assert cell.endswith(f"({float(excess):.0f})"), (family, parts[:3], cell)
 
 
 @pytest.mark.parametrize(

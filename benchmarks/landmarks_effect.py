@@ -199,7 +199,44 @@ def over_seeds(seeds: list[int], a: argparse.Namespace, tmp: Path) -> list[str]:
             f"| {_t_interval([n[0] - o[0] for n, o in zip(new, old, strict=True)])} | {exc} "
             f"| {_t_interval([n[1] - o[1] for n, o in zip(new, old, strict=True)])} |"
         )
-    return lines
+    return lines + ["", *multiplicity(lines)]
+
+
+def multiplicity(lines: list[str]) -> list[str]:
+    """Which Δ intervals of the over-seeds table exclude zero, and which stay so after
+    Holm's correction over all of them (two-sided one-sample t-tests of the per-seed
+    differences), computed from the table's own per-seed values (``lines``)."""
+    tests: list[tuple[str, float, float]] = []  # (row and metric, mean difference, p)
+    for line in lines:
+        cells = [c.strip() for c in line.strip("|").split("|")]
+        if len(cells) != 7 or "/" not in cells[3] or cells[0] == "rows":
+            continue
+        for metric, col in (("success", 3), ("median excess", 5)):
+            pairs = [pair.split("/") for pair in cells[col].split(" · ")]
+            d = np.array([float(a) - float(b) for a, b in pairs if "—" not in (a, b)])
+            if len(d) < 2 or not np.isfinite(d).all():
+                continue
+            pval = 1.0 if d.std(ddof=1) == 0 else float(stats.ttest_1samp(d, 0.0).pvalue)
+            tests.append((f"{cells[0]}, {cells[1]}, {cells[2]}: {metric}", float(d.mean()), pval))
+    n = len(tests)
+    ranked = sorted(range(n), key=lambda i: tests[i][2])
+    holm = [1.0] * n
+    running = 0.0
+    for rank, i in enumerate(ranked):  # Holm's step-down adjustment
+        running = max(running, min(1.0, (n - rank) * tests[i][2]))
+        holm[i] = running
+    raw = [t for t in tests if t[2] < 0.05]
+    kept = [t for t, h in zip(tests, holm, strict=True) if h < 0.05]
+
+    def told(ts: list[tuple[str, float, float]]) -> str:
+        return "; ".join(f"{name} {m:+.1f} (p = {pv:.3f})" for name, m, pv in ts) or "none"
+
+    return [
+        f"Of the {n} intervals above, {len(raw)} exclude{'s' if len(raw) == 1 else ''} zero "
+        f"({told(raw)}); about "
+        f"{0.05 * n:.1f} would by chance alone. After Holm's correction over the {n}: "
+        f"{len(kept)} ({told(kept)}).",
+    ]
 
 
 if __name__ == "__main__":

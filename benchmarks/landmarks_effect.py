@@ -26,6 +26,7 @@ import math
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from scipy import stats
@@ -34,6 +35,23 @@ from copi.experiments import BenchmarkConfig, NavigationConfig, evaluate, run_be
 from copi.experiments.benchmark_report import _diff, _pair
 from copi.experiments.presets import PRESETS
 from copi.experiments.store import ResultsStore
+
+
+def _learn_into(name: str, seed: int, extra: dict, path: Path, workers: int) -> Any:
+    """The preset ``name``'s capabilities learnt with ``seed`` (and ``extra``), saved."""
+    from copi.learning import learn
+
+    c = learn(dataclasses.replace(PRESETS[name].learn, workers=workers, seed=seed, **extra))
+    c.save(path)
+    return c
+
+
+def _experiment1(caps_path: str, name: str, out: Path, a: argparse.Namespace) -> list:
+    """Experiment 1's episodes of preset ``name``'s method on ``caps_path``."""
+    cfg = NavigationConfig(caps_path, method=PRESETS[name].method, worlds=a.worlds)
+    rid = evaluate(cfg, out, workers=a.workers)
+    with ResultsStore(out, readonly=True) as store:
+        return store.episodes(rid)
 
 
 def main() -> None:
@@ -47,16 +65,13 @@ def main() -> None:
     seeds = [int(x) for x in a.seeds.split(",")]
     t0 = time.perf_counter()
     tmp = Path(tempfile.mkdtemp())
-    from copi.learning import learn
 
     caps: dict[str, dict[str, str]] = {"new": {}, "old": {}}
     counts: dict[str, dict[str, str]] = {"new": {}, "old": {}}
     for rule, extra in (("new", {}), ("old", {"skeleton_bootstrap": 0})):
         for name in ("faithful", "extended", "learnt"):
-            c = learn(dataclasses.replace(PRESETS[name].learn, workers=a.workers,
-                                          seed=seeds[0], **extra))  # fmt: skip
             path = tmp / f"{rule}-{name}.npz"
-            c.save(path)
+            c = _learn_into(name, seeds[0], extra, path, a.workers)
             caps[rule][name] = str(path)
             counts[rule][name] = f"{c.landmarks.n_landmarks} ({len(c.reduction.templates)})"
     lines = [
@@ -78,12 +93,7 @@ def main() -> None:
     for name in ("faithful", "extended"):
         rows = {}
         for rule in ("new", "old"):
-            cfg = NavigationConfig(caps[rule][name], method=PRESETS[name].method,
-                                   worlds=a.worlds)  # fmt: skip
-            out = tmp / f"e1-{rule}-{name}.sqlite"
-            rid = evaluate(cfg, out, workers=a.workers)
-            with ResultsStore(out, readonly=True) as store:
-                rows[rule] = store.episodes(rid)
+            rows[rule] = _experiment1(caps[rule][name], name, tmp / f"e1-{rule}-{name}.sqlite", a)
         ds, de = _pair(rows["new"], rows["old"])
         sn = sum(r.outcome == "success" for r in rows["new"]) / len(rows["new"])
         so = sum(r.outcome == "success" for r in rows["old"]) / len(rows["old"])
@@ -143,7 +153,6 @@ def _summary(rows: list) -> tuple[float, float]:
 def over_seeds(seeds: list[int], a: argparse.Namespace, tmp: Path) -> list[str]:
     """Experiment 1 and the chain's benchmark rows under both rules, each seed learnt
     anew: per seed, and the mean paired difference over seeds."""
-    from copi.learning import learn
 
     arms = ("copi-faithful", "copi-extended")
     # (row key) -> rule -> per seed (success %, median excess %)
@@ -153,21 +162,15 @@ def over_seeds(seeds: list[int], a: argparse.Namespace, tmp: Path) -> list[str]:
         caps: dict[str, dict[str, str]] = {"new": {}, "old": {}}
         for rule, extra in (("new", {}), ("old", {"skeleton_bootstrap": 0})):
             for name in ("faithful", "extended"):
-                c = learn(dataclasses.replace(PRESETS[name].learn, workers=a.workers,
-                                              seed=seed, **extra))  # fmt: skip
                 path = tmp / f"s{seed}-{rule}-{name}.npz"
-                c.save(path)
+                c = _learn_into(name, seed, extra, path, a.workers)
                 caps[rule][name] = str(path)
             landmarks[rule].append(c.landmarks.n_landmarks)
             for name in ("faithful", "extended"):
-                cfg = NavigationConfig(caps[rule][name], method=PRESETS[name].method,
-                                       worlds=a.worlds)  # fmt: skip
-                out = tmp / f"s{seed}-e1-{rule}-{name}.sqlite"
-                rid = evaluate(cfg, out, workers=a.workers)
-                with ResultsStore(out, readonly=True) as store:
-                    key = ("Experiment 1", PRESETS[name].method, "map")
-                    table.setdefault(key, {}).setdefault(rule, []).append(
-                        _summary(store.episodes(rid)))
+                rows = _experiment1(caps[rule][name], name,
+                                    tmp / f"s{seed}-e1-{rule}-{name}.sqlite", a)  # fmt: skip
+                key = ("Experiment 1", PRESETS[name].method, "map")
+                table.setdefault(key, {}).setdefault(rule, []).append(_summary(rows))
             cfg = BenchmarkConfig(methods=arms, episodes=a.episodes, capabilities=caps[rule])
             store_path = tmp / f"s{seed}-bench-{rule}.sqlite"
             run_benchmark(cfg, store_path, workers=a.workers)

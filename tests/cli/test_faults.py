@@ -25,6 +25,7 @@ _HERE = str(Path(copi.__file__).parents[1])
 ENV = {
     **os.environ,
     "PYTHONWARNINGS": "ignore",
+    "PYTHONFAULTHANDLER": "1",  # a hung child shows its threads' stacks on SIGABRT
     "PYTHONPATH": os.pathsep.join([_HERE, *filter(None, [os.environ.get("PYTHONPATH")])]),
 }
 
@@ -120,6 +121,18 @@ def _start(args: list[str], cwd: Path) -> subprocess.Popen[str]:
     )  # fmt: skip
 
 
+def _stopped(proc: subprocess.Popen[str], timeout: float = 60) -> str:
+    """Ctrl-C ``proc`` and wait for it to end; its stderr. A child still running after
+    ``timeout`` fails the test with every thread's stack (faulthandler, on SIGABRT)."""
+    proc.send_signal(signal.SIGINT)
+    try:
+        return proc.communicate(timeout=timeout)[1]
+    except subprocess.TimeoutExpired:
+        proc.send_signal(signal.SIGABRT)
+        _, err = proc.communicate()
+        pytest.fail(f"no exit {timeout:g} s after Ctrl-C; its threads:\n{err}")
+
+
 def _ctrl_c_as_at_a_terminal() -> None:
     # A job started in the background inherits SIGINT ignored; a terminal's does not.
     signal.signal(signal.SIGINT, signal.SIG_DFL)
@@ -137,7 +150,9 @@ def _wait_for_rows(path: Path, n: int, proc: subprocess.Popen[str], timeout: flo
                 continue
             if have >= n:
                 return int(have)
-    pytest.fail(f"no {n} rows in time: {proc.poll()}")
+    proc.kill()
+    _, err = proc.communicate()  # closes its pipes: no ResourceWarning in a later test
+    pytest.fail(f"no {n} rows in time (exit {proc.returncode}): {err}")
 
 
 @pytest.mark.parametrize("workers", ["1", "2"])
@@ -149,8 +164,7 @@ def test_ctrl_c_stops_cleanly_and_says_how_to_resume(tmp_path: Path, workers: st
             "-o", str(out), "--workers", workers]  # fmt: skip
     proc = _start(args, tmp_path)
     _wait_for_rows(out, 3, proc)
-    proc.send_signal(signal.SIGINT)
-    _, err = proc.communicate(timeout=60)
+    err = _stopped(proc)
     assert proc.returncode == 130, err
     lines = err.strip().splitlines()
     assert len(lines) == 1 and "Traceback" not in err, err
@@ -161,8 +175,7 @@ def test_ctrl_c_stops_cleanly_and_says_how_to_resume(tmp_path: Path, workers: st
     )
     again = _start(args, tmp_path)
     _wait_for_rows(out, saved + 1, again)
-    again.send_signal(signal.SIGINT)
-    _, err = again.communicate(timeout=60)
+    err = _stopped(again)
     assert f"copi: resuming: {saved}/20000 episodes already done in {out}" in err
     assert again.returncode == 130, err
 

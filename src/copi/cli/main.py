@@ -13,6 +13,7 @@ import importlib
 import os
 import sqlite3
 import sys
+import threading
 
 import typer
 
@@ -38,7 +39,23 @@ def _error(message: str) -> None:
 def _interrupted(exc: BaseException | None) -> None:
     detail = str(exc) if exc is not None and str(exc) else ""
     console.print(f"copi: interrupted{': ' + detail if detail else ''}", highlight=False)
+    if _threads_left():
+        # An interrupted process pool's manager thread can outlive the pool's bounded stop
+        # (copi.experiments.executor._stop_now); the interpreter would join it at exit and
+        # hang. Everything is saved (each chunk is committed), so leave now.
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(130)
     sys.exit(130)
+
+
+def _threads_left() -> bool:
+    main_thread = threading.main_thread()
+    return any(
+        t is not main_thread and t.is_alive() and not t.daemon
+        and type(t).__module__.startswith("concurrent.futures")
+        for t in threading.enumerate()
+    )  # fmt: skip
 
 
 def _ctrl_c_inside(exc: BaseException) -> KeyboardInterrupt | None:

@@ -73,14 +73,34 @@ def make_executor(workers: int = 1, scheduler: str | None = None) -> Iterator[Ex
     try:
         yield pool
     except BaseException:
-        # Interrupted or failed: stop the workers now instead of waiting for their
-        # chunks, whose results could no longer be stored anyway.
-        for proc in list(getattr(pool, "_processes", {}).values()):
-            if proc.is_alive():
-                proc.terminate()
-        pool.shutdown(wait=True, cancel_futures=True)
+        _stop_now(pool)
         raise
     pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _stop_now(pool: ProcessPoolExecutor, grace: float = 5.0) -> None:
+    """Stop an interrupted or failed pool without waiting for its chunks, whose results
+    could no longer be stored anyway, and without any wait that has no bound.
+
+    ``shutdown(wait=True)`` after terminating workers can block for ever on CPython 3.11
+    (the pool's manager thread joins a queue feeder that may be stuck on a pipe nobody
+    reads, or a lock a signal left taken), so: no new work, workers terminated then killed,
+    and the manager thread given ``grace`` seconds. The command line exits at once should
+    that thread outlive it (see ``copi.cli.main``)."""
+    pool.shutdown(wait=False, cancel_futures=True)
+    running = getattr(pool, "_processes", None) or {}
+    procs = [proc for proc in list(running.values()) if proc.is_alive()]
+    for proc in procs:
+        proc.terminate()
+    deadline = time.monotonic() + grace
+    for proc in procs:
+        proc.join(max(0.0, deadline - time.monotonic()))
+        if proc.is_alive():
+            proc.kill()
+            proc.join(1.0)
+    manager = getattr(pool, "_executor_manager_thread", None)
+    if manager is not None:
+        manager.join(max(0.1, deadline - time.monotonic()))
 
 
 def _worker_init(parent: int) -> None:

@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from copi.errors import InvalidArgumentError
+from copi.games import _kernels as _k
 
 __all__ = [
     "ChauffeurParams",
@@ -107,17 +108,8 @@ def isaacs_control(
 
     ``dt_turn`` is the largest heading change per sub-step (V_p dt / R); when the evader
     is nearly ahead, u is just enough to point at it, so the car does not chatter."""
-    x, y = _relative(p, heading, e)  # x > 0: evader to the right
-    # Turning circles: centres at (+-R, 0) in the pursuer frame.
-    inside_right = (x - turn_radius) ** 2 + y * y < turn_radius**2
-    inside_left = (x + turn_radius) ** 2 + y * y < turn_radius**2
-    if inside_right:
-        return 1.0  # swerve left (away) to open the distance
-    if inside_left:
-        return -1.0
-    angle = math.atan2(x, y)  # > 0: evader to the right (clockwise from the heading)
-    # u > 0 turns left (counter-clockwise): towards a right-hand evader needs u < 0.
-    return float(np.clip(-angle / dt_turn, -1.0, 1.0))
+    return float(_k.isaacs_u(float(p[0]), float(p[1]), float(heading), float(e[0]),
+                             float(e[1]), float(turn_radius), float(dt_turn)))  # fmt: skip
 
 
 def evader_direction(
@@ -160,14 +152,6 @@ class Pursuer:
         the heading is advanced by u V_p dt / R: u > 0 turns left (counter-clockwise),
         the opposite of the paper's u (see the module docstring)."""
         p = self.params
-        u = float(np.clip(u, -1.0, 1.0))
-        dist = p.pursuer_speed * dt
-        h0 = self.heading
-        # Heading change over the arc, and its chord: length 2 rho sin(dh / 2), written as
-        # dist sin(x) / x with x = dh / 2 so that nearly straight arcs lose no precision.
-        dh = u * dist / p.turn_radius
-        half = 0.5 * dh
-        chord = dist * (math.sin(half) / half if half != 0.0 else 1.0)
-        mid = h0 + half
-        self.heading = h0 + dh
-        return chord * np.array([math.cos(mid), math.sin(mid)])
+        dx, dy, self.heading = _k.arc(self.heading, float(u), p.pursuer_speed, p.turn_radius,
+                                      float(dt))  # fmt: skip
+        return np.array([dx, dy])

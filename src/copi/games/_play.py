@@ -10,8 +10,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from copi.games import _kernels as _k
 from copi.games._chauffeur import ChauffeurParams, Pursuer, evader_direction, isaacs_control
-from copi.geometry import move_discs
 
 __all__ = ["GameResult", "first_contact", "play_open"]
 
@@ -40,22 +40,10 @@ def first_contact(
 ) -> tuple[float, float]:
     """For two points moving linearly over tau in [0, 1]: the first tau at which they
     are within ``ell`` (inf if never), and their least distance."""
-    r = e0 - p0
-    v = de - dp
-    a = float(v @ v)
-    b = float(r @ v)
-    c = float(r @ r) - ell * ell
-    tmin = min(max(-b / a, 0.0), 1.0) if a > 0 else 0.0
-    closest = float(np.linalg.norm(r + tmin * v))
-    if c <= 0:
-        return 0.0, closest
-    if a == 0:
-        return math.inf, closest
-    disc = b * b - a * c
-    if disc < 0:
-        return math.inf, closest
-    tau = (-b - math.sqrt(disc)) / a
-    return (tau if 0 <= tau <= 1 else math.inf), closest
+    tau, closest = _k.first_contact(float(p0[0]), float(p0[1]), float(dp[0]), float(dp[1]),
+                                    float(e0[0]), float(e0[1]), float(de[0]), float(de[1]),
+                                    float(ell))  # fmt: skip
+    return float(tau), float(closest)
 
 
 def play_open(
@@ -112,23 +100,12 @@ def pursuer_step(
     through one; its heading keeps turning as steered); it ignores moving obstacles.
     Returns (tau of capture in [0, 1] or inf, least distance)."""
     params = car.params
-    n = params.substeps
-    h = 1.0 / n
-    dturn = params.pursuer_speed * h / params.turn_radius
-    closest = math.inf
-    for i in range(n):
-        e = e0 + (i * h) * de
-        if control is None:
-            u = isaacs_control(car.position, car.heading, e, params.turn_radius, dturn)
-        else:
-            u = control
-        dp = car.arc(u, h)
-        if len(segments):
-            new, _ = move_discs(car.position, dp, segments, radius)
-            dp = new - car.position
-        tau, near = first_contact(car.position, dp, e, h * de, params.capture_radius)
-        closest = min(closest, near)
-        car.position = car.position + dp
-        if math.isfinite(tau):
-            return (i + tau) * h, closest
-    return math.inf, closest
+    segs = np.ascontiguousarray(segments, dtype=np.float64).reshape(-1, 4)
+    x, y, car.heading, tau, closest = _k.pursuer_step(
+        float(car.position[0]), float(car.position[1]), float(car.heading),
+        float(e0[0]), float(e0[1]), float(de[0]), float(de[1]), segs, float(radius),
+        params.pursuer_speed, params.turn_radius, params.capture_radius, params.substeps,
+        0.0 if control is None else float(control), control is None,
+    )  # fmt: skip
+    car.position = np.array([x, y])
+    return float(tau), float(closest)

@@ -186,18 +186,12 @@ def copi_validation(caps_path: Path, policies: dict[str, dict]) -> dict[str, flo
 
 
 def copi_cost(caps_path: Path) -> tuple[int, str]:
-    from copi.learning import Capabilities
+    from copi.learning import Capabilities, simulated_steps
 
-    caps = Capabilities.load(caps_path)
-    p = caps.params
-    explore = int(p["worlds"]) * int(p["steps"])
-    walk = int(p.get("probe_worlds", 0)) * int(p.get("probe_steps", 0))
-    probes = int(p.get("probe_worlds", 0)) * (int(p.get("probe_steps", 0)) // 2) \
-        * (int(p.get("directions", 16)) + 1) * int(p.get("probe_horizon", 3))  # fmt: skip
-    total = explore + walk + probes
-    return total, (
-        f"{explore:,} exploration steps, {walk:,} steps of probing walks and at "
-        f"most {probes:,} counterfactual probe steps"
+    c = simulated_steps(Capabilities.load(caps_path).params)
+    return c["total"], (
+        f"{c['exploration']:,} exploration steps, {c['walks']:,} steps of probing walks and at "
+        f"most {c['probes']:,} counterfactual probe steps"
     )
 
 

@@ -61,6 +61,8 @@ def _one_line_error(code: int, err: str) -> str:
         ["learn"],
         ["learn", "-o"],
         ["learn", "-o", "c.npz", "--directions", "four"],
+        ["learn", "-o", "c.npz", "--probe-families", "star,nowhere"],
+        ["learn", "-o", "c.npz", "--probe-steps", "0"],
         ["nosuch"],
         ["world", "nosuch"],
         ["world", "sample", "-n", "0", "-o", "w.json"],

@@ -15,7 +15,7 @@ from copi.baselines import CompassGuard
 from copi.errors import CapabilitiesFormatError, InvalidArgumentError
 from copi.experiments._episode import run_episode
 from copi.experiments.navigation import draw_episode
-from copi.learning import Capabilities, LearnParams, learn
+from copi.learning import Capabilities, LearnParams, learn, simulated_steps
 from copi.learning._safety import (
     SafetyModel,
     predict,
@@ -241,3 +241,14 @@ def test_grown_contexts_follow_their_map_and_weights_are_checked(learnt) -> None
     for key in ("alpha", "beta"):
         with pytest.raises(InvalidArgumentError, match=f"{key} must be a finite number >= 0"):
             LearntAgent(learnt, **{key: -1.0})
+
+
+def test_the_learning_samples_counted_are_the_states_probed(learnt: Capabilities) -> None:
+    # every second state of 8 walks of 60 steps, each of 17 actions held 3 steps at most
+    cost = simulated_steps(learnt.params)
+    stage = learnt.stats["stages"][-1]
+    assert cost["probes"] == stage["probed_states"] * 17 * 3 == 8 * 30 * 51
+    assert cost["exploration"] == learnt.stats["stages"][0]["samples"] == 6 * 150
+    assert cost["total"] == 900 + 8 * 60 + cost["probes"]
+    odd = simulated_steps({**learnt.params, "probe_steps": 61, "safety": False})
+    assert odd["walks"] == odd["probes"] == 0 and odd["total"] == 900

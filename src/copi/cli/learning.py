@@ -52,6 +52,21 @@ def learn_command(
             "faithful (the paper's: 4 directions), extended (16), learnt-motion.",
         ),
     ] = None,
+    probe_worlds: Annotated[
+        int,
+        typer.Option("--probe-worlds", min=1, help="Worlds of the probing walks of the safety "
+                     "priors (learnt presets)."),
+    ] = 60,
+    probe_steps: Annotated[
+        int,
+        typer.Option("--probe-steps", min=1, help="Random-walk steps per probing world "
+                     "(every second state is probed)."),
+    ] = 150,
+    probe_families: Annotated[
+        str,
+        typer.Option("--probe-families", help="Comma-separated families of the probing "
+                     "walks (task-free)."),
+    ] = "star,crowd,polygon,indoor",
     motion: Annotated[
         bool,
         typer.Option(
@@ -64,11 +79,12 @@ def learn_command(
     """Learn capabilities offline, without any task (paper §II): explore, grow the
     context map, skeletonise it into landmarks, reduce them by symmetry, learn local
     policies. Without --preset (or --directions), learns the default preset, learnt;
-    --preset faithful learns the paper's."""
+    --preset faithful learns the paper's. A learnt preset also probes task-free walks for
+    its safety priors (--probe-*); the simulated steps of it all are printed."""
     from copi.errors import InvalidArgumentError
     from copi.experiments.presets import DEFAULT_PRESET
     from copi.experiments.presets import preset as get_preset
-    from copi.learning import LearnParams, learn
+    from copi.learning import LearnParams, learn, simulated_steps
 
     if preset is None and directions is None and not motion:
         preset = DEFAULT_PRESET
@@ -102,6 +118,9 @@ def learn_command(
         family=family,
         safety=safety,
         motion=motion,
+        probe_worlds=probe_worlds,
+        probe_steps=probe_steps,
+        probe_families=probe_families,
     )
     check_outputs({"the capabilities file": (output, "npz")})
     output.parent.mkdir(parents=True, exist_ok=True)
@@ -117,6 +136,10 @@ def learn_command(
     caps.save(output)
     _print_stages(caps.stats["stages"])
     out.print(f"{output}: {_summary_line(caps.summary())}")
+    cost = simulated_steps(params)
+    out.print(f"learning samples: {cost['total']:,} simulated steps ({cost['exploration']:,} "
+              f"exploring, {cost['walks']:,} walking to probe, at most {cost['probes']:,} "
+              "probing)")  # fmt: skip
 
 
 def _summary_line(s: dict[str, object]) -> str:

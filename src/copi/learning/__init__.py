@@ -11,7 +11,7 @@ from __future__ import annotations
 from copi.learning._capabilities import FORMAT_VERSION, Capabilities
 from copi.learning._explore import Exploration, explore
 from copi.learning._gng import GrowingNeuralGas
-from copi.learning._pipeline import LearnParams, learn
+from copi.learning._pipeline import LearnParams, learn, simulated_steps
 from copi.learning._policies import (
     ActionPriors,
     AStarLearner,
@@ -54,5 +54,6 @@ __all__ = [
     "local_world",
     "reduce_landmarks",
     "ring_operators",
+    "simulated_steps",
     "skeletonize",
 ]

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -28,7 +28,7 @@ from copi.learning._skeleton import bootstrap_landmarks, skeletonize
 from copi.learning._symmetry import SymmetryGroup, reduce_landmarks, ring_operators
 from copi.world import RangeSensor, check_family
 
-__all__ = ["LearnParams", "learn"]
+__all__ = ["LearnParams", "learn", "simulated_steps"]
 
 
 @dataclass(frozen=True)
@@ -135,6 +135,33 @@ class LearnParams:
 
 Progress = Callable[[str, int, int], None]
 """progress(stage, done, total), called as a stage advances."""
+
+
+def simulated_steps(params: LearnParams | Mapping[str, Any]) -> dict[str, int]:
+    """The simulator steps :func:`learn` takes with ``params``: its learning samples,
+    counted as a reinforcement learner's environment steps are. ``exploration`` (worlds x
+    steps), and with safety priors the probing ``walks`` and at most ``probes`` steps of
+    counterfactual probes (every second state of a walk, each of the directions and
+    waiting held ``probe_horizon`` steps; fewer where a probe touches something).
+    ``params`` may be a capabilities file's ``params``.
+
+    Examples
+    --------
+    >>> simulated_steps(LearnParams())["total"]
+    30000
+    >>> simulated_steps(LearnParams(directions=16, safety=True))["total"]
+    268500
+    """
+    if not isinstance(params, LearnParams):
+        known = {f.name for f in dataclasses.fields(LearnParams)}
+        params = LearnParams(**{k: v for k, v in dict(params).items() if k in known})
+    p = params
+    explore_steps = p.worlds * p.steps
+    walks = p.probe_worlds * p.probe_steps if p.safety else 0
+    probed = p.probe_worlds * ((p.probe_steps + 1) // 2) if p.safety else 0
+    probes = probed * (p.directions + 1) * p.probe_horizon
+    return {"exploration": explore_steps, "walks": walks, "probes": probes,
+            "total": explore_steps + walks + probes}  # fmt: skip
 
 
 def learn(params: LearnParams | None = None, *, progress: Progress | None = None) -> Capabilities:

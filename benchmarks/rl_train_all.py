@@ -109,11 +109,11 @@ def _install(out: Path) -> None:
         summary["command"] = summary.get("command", "").replace(prefix, "results/rl/")
         (SHIPPED / f"ppo-{name}.json").write_text(json.dumps(summary, indent=1) + "\n")
         shutil.copy(out / f"ppo-{name}-s0.png", DOCS / f"rl-curve-{name}.png")
-    # the other seeds' in-family policies: the spread over training seeds (rl_experiments)
+    # the other seeds' policies: the spread over training seeds (rl_experiments)
     (SHIPPED / "seeds").mkdir(exist_ok=True)
     for src in sorted(out.glob("ppo-*-s*.npz")):
         name, seed = src.stem.removeprefix("ppo-").rsplit("-s", 1)
-        if seed == "0" or name not in FAMILIES or not (out / f"{src.stem}.json").is_file():
+        if seed == "0" or name not in CONFIGS or not (out / f"{src.stem}.json").is_file():
             continue
         policy = load_policy(src)
         policy.info["command"] = policy.info.get("command", "").replace(prefix, "results/rl/")

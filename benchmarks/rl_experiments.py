@@ -39,7 +39,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from benchmarks._timing import kept_times  # noqa: E402
 
 FAMILIES = ("star", "polygon", "indoor", "maps", "crowd")
-METHODS = ["copi-learnt", "compass-guard", "dwa", "ppo", "ppo-guard",
+METHODS = ["copi-learnt", "compass-guard", "dwa", "straight", "ppo", "ppo-guard",
            *[f"ppo-{f}" for f in FAMILIES]]  # fmt: skip
 EVADERS = ["learnt", "compass-guard", "ppo", "ppo-guard", "ppo-chauffeur", "game"]
 

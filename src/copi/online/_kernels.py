@@ -126,6 +126,8 @@ def _room(s, static, cos, sin, max_range, ax, ay, step):  # type: ignore[no-unty
     return end, sweep, sweep_all
 
 
+_MARGIN = 1e-9
+"""Slack above rounding with which a bound on :func:`_room`'s distances is trusted."""
 _WALL = 0.31
 """Least distance a guarded step's path keeps from any hit: the agent's radius (0.3) and
 a hair."""
@@ -448,9 +450,15 @@ def _learnt_choose(  # type: ignore[no-untyped-def]
     else:
         ring_features(s, prev, feat)
     now = np.inf
+    hit = np.inf  # the nearest hit, and the nearest the static map does not explain
+    moving = np.inf
     for i in range(s.shape[0]):
         if s[i] < now:
             now = s[i]
+        if s[i] < max_range:
+            hit = min(hit, s[i])
+            if s[i] < static[i] - 0.05:
+                moving = min(moving, s[i])
     wall = min(_WALL, now - 1e-6)
     roomy = min(0.35, now - 1e-6)
     best = -1
@@ -485,7 +493,13 @@ def _learnt_choose(  # type: ignore[no-untyped-def]
         ax = math.cos(a0)
         ay = math.sin(a0)
         step = _step_length(along[d] * reach, reach)
-        end, sweep, sweep_all = _room(s, static, cos, sin, max_range, ax, ay, step)
+        if hit - step >= wall + _MARGIN and (guard <= 0.0 or moving - step >= guard + _MARGIN):
+            # every hit is farther than the step: _room's distances, each at least a hit's
+            # range less the step, could refuse nothing (and a fallback is needed only
+            # when nothing is admitted), so they are not measured
+            end = sweep = sweep_all = np.inf
+        else:
+            end, sweep, sweep_all = _room(s, static, cos, sin, max_range, ax, ay, step)
         if guard <= 0.0:
             end = np.inf
             sweep = np.inf

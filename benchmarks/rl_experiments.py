@@ -97,7 +97,10 @@ def variant(bench: Path, name: str, params: dict, episodes: int,
 
     path = bench / f"capabilities-learnt-{name}.npz"
     if not path.is_file():
+        t0 = time.perf_counter()
         learn(LearnParams(**params)).save(path)
+        (bench / f"{name}-learn.json").write_text(json.dumps(
+            {"seconds": time.perf_counter() - t0}))  # fmt: skip
     cache = bench / f"{name}.json"
     done = json.loads(cache.read_text()) if cache.is_file() else {}
     caps = Capabilities.load(path)
@@ -415,7 +418,7 @@ def main() -> None:
         lines.append(
             f"| {names[e]} | {_pct(float(np.mean(list(games[e].values()))))} | {d} | {better} |"
         )
-    lines += lean_rows(LEAN, lean_succ, lean_rate, lean_games, succ, rate, games, policies)
+    lines += lean_rows(bench, LEAN, lean_succ, lean_rate, lean_games, succ, rate, games, policies)
     lines += [
         "",
         "## What each learner cost",
@@ -491,12 +494,15 @@ def seed_rows(succ: dict, seeds: dict[tuple[str, int, str], dict[int, bool]],
     return rows
 
 
-def lean_rows(params: dict, lean_succ: dict, lean_rate: dict, lean_games: dict[int, bool],
-              succ: dict, rate: dict, games: dict, policies: dict) -> list[str]:  # fmt: skip
+def lean_rows(bench: Path, params: dict, lean_succ: dict, lean_rate: dict,
+              lean_games: dict[int, bool], succ: dict, rate: dict, games: dict,
+              policies: dict) -> list[str]:  # fmt: skip
     """The section on copi learnt at a hundredth of PPO's samples (see :data:`LEAN`)."""
     from copi.learning import LearnParams, simulated_steps
 
     cost = simulated_steps(LearnParams(**params))["total"]
+    took = json.loads((bench / "lean-learn.json").read_text())["seconds"] \
+        if (bench / "lean-learn.json").is_file() else math.nan  # fmt: skip
     ppo = min(info["steps"] for info in policies.values())
     shown = ", ".join(f"{k}={v!r}" for k, v in params.items())
     lines = [
@@ -504,8 +510,9 @@ def lean_rows(params: dict, lean_succ: dict, lean_rate: dict, lean_games: dict[i
         "## copi at a hundredth of PPO's samples (level map)",
         "",
         f"copi-learnt from `LearnParams({shown})`: {cost:,} simulated steps, "
-        f"1/{ppo / cost:.0f} of one PPO run's {ppo:,} environment steps, star worlds only and "
-        "no task (the setting is fixed by that budget, not tuned). Against each family's "
+        f"1/{ppo / cost:.0f} of one PPO run's {ppo:,} environment steps, learnt in "
+        f"{took:.0f} s on one core, star worlds only and no task (the setting is fixed by "
+        "that budget, not tuned). Against each family's "
         "own PPO (`ppo-F`), against PPO trained on star (`ppo-star`: another world for every "
         "family but star) and, in the game, against PPO trained for it:",
         "",

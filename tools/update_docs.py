@@ -39,7 +39,7 @@ RESULTS: list[tuple[str, str, str]] = [
      "**Against deep RL.** PPO trained in the family it is tested on (2M steps), beside "
      "copi-learnt (learnt once, without any task); this PPO learnt little beyond following "
      "the global direction (its last column: against `straight`)"),
-    ("rl.md", "| ppo-chauffeur",
+    ("rl.md#A new task", "| ppo-chauffeur",
      "**A new task**, the homicidal chauffeur's evader: copi-learnt's capabilities "
      "unchanged, against PPO trained for the game with the same step budget"),
 ]

@@ -55,11 +55,11 @@ docs: install
 	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict --quiet
 
 # The reference planner is compared with extremitypathfinder when it can be installed;
-# the long data checks (every Moving AI scenario line) run here, not in `make test`.
+# the long data checks (every Moving AI scenario line) run here, not in `make test`. The
+# timings run even when a slow check fails; make bench then ends with that failure.
 bench: install
 	-$(BIN)/python -m pip install --quiet extremitypathfinder || echo "extremitypathfinder unavailable: no ratio"
-	$(BIN)/pytest -m slow
-	$(BIN)/python benchmarks/run.py
+	$(BIN)/pytest -m slow; slow=$$?; $(BIN)/python benchmarks/run.py && exit $$slow
 
 clean:
 	rm -rf $(VENV) build *.egg-info src/*.egg-info .pytest_cache .mypy_cache .ruff_cache

@@ -10,6 +10,7 @@ import sqlite3
 import subprocess
 import sys
 import textwrap
+import threading
 import time
 from contextlib import closing
 from pathlib import Path
@@ -203,6 +204,23 @@ def _alive(pid: int) -> bool:
             return fh.read().split()[2] != "Z"
     except FileNotFoundError:
         return False
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+def test_an_interrupted_pool_stops_its_workers_at_once() -> None:
+    from copi.experiments.executor import make_executor
+
+    t0 = time.monotonic()
+    with pytest.raises(KeyboardInterrupt), make_executor(2) as pool:
+        for _ in range(4):
+            pool.submit(time.sleep, 300)
+        time.sleep(1.0)  # the workers are in their tasks
+        pids = list(pool._processes)  # type: ignore[attr-defined]
+        raise KeyboardInterrupt
+    assert time.monotonic() - t0 < 20
+    assert len(pids) == 2 and not any(_alive(p) for p in pids)
+    assert not any(t.is_alive() for t in threading.enumerate()
+                   if type(t).__module__.startswith("concurrent.futures"))  # fmt: skip
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")

@@ -87,9 +87,11 @@ def _stop_now(pool: ProcessPoolExecutor, grace: float = 5.0) -> None:
     reads, or a lock a signal left taken), so: no new work, workers terminated then killed,
     and the manager thread given ``grace`` seconds. The command line exits at once should
     that thread outlive it (see ``copi.cli.main``)."""
-    pool.shutdown(wait=False, cancel_futures=True)
+    # taken first: shutdown(wait=False) drops the pool's references to both
     running = getattr(pool, "_processes", None) or {}
     procs = [proc for proc in list(running.values()) if proc.is_alive()]
+    manager = getattr(pool, "_executor_manager_thread", None)
+    pool.shutdown(wait=False, cancel_futures=True)
     for proc in procs:
         proc.terminate()
     deadline = time.monotonic() + grace
@@ -98,7 +100,6 @@ def _stop_now(pool: ProcessPoolExecutor, grace: float = 5.0) -> None:
         if proc.is_alive():
             proc.kill()
             proc.join(1.0)
-    manager = getattr(pool, "_executor_manager_thread", None)
     if manager is not None:
         manager.join(max(0.1, deadline - time.monotonic()))
 

@@ -75,6 +75,23 @@ def run_benchmark(bench: Path, episodes: int, workers: int) -> None:
     subprocess.run(cmd, check=True)
 
 
+def episodes_won(agent_of: Any, family: str, level: str, episodes: int) -> dict[str, bool]:
+    """Success of ``agent_of()`` (a fresh agent an episode) on the benchmark's episodes
+    0 .. episodes-1 of ``family`` (seed 0) at ``level``, with the benchmark's step limit."""
+    from copi.experiments import run_episode
+    from copi.experiments._episode import optimal_to_goal
+    from copi.experiments.benchmark import benchmark_max_steps
+    from copi.experiments.navigation import draw_episode
+
+    won = {}
+    for k in range(episodes):
+        sim = draw_episode(family, k, 0)
+        out = run_episode(agent_of(), sim, sensing=level,
+                          max_steps=benchmark_max_steps(optimal_to_goal(sim)))  # fmt: skip
+        won[str(k)] = out.outcome == "success"
+    return won
+
+
 STAR_ONLY = {"directions": 16, "safety": True, "probe_families": "star"}
 """copi-learnt learnt in star worlds alone, its probing walks too (the preset's default
 also probes crowd, polygon and indoor worlds)."""
@@ -89,10 +106,7 @@ def variant(bench: Path, name: str, params: dict, episodes: int,
     """copi-learnt with capabilities learnt with ``LearnParams(**params)``: success per
     (family, level) on the benchmark's episodes, its rate, and the capabilities file
     (both cached in ``bench``)."""
-    from copi.experiments import make_agent, run_episode
-    from copi.experiments._episode import optimal_to_goal
-    from copi.experiments.benchmark import benchmark_max_steps
-    from copi.experiments.navigation import draw_episode
+    from copi.experiments import make_agent
     from copi.learning import Capabilities, LearnParams, learn
 
     path = bench / f"capabilities-learnt-{name}.npz"
@@ -109,14 +123,8 @@ def variant(bench: Path, name: str, params: dict, episodes: int,
             key = f"{fam}/{level}"
             if len(done.get(key, {})) >= episodes:
                 continue
-            won = {}
-            for k in range(episodes):
-                sim = draw_episode(fam, k, 0)
-                limit = benchmark_max_steps(optimal_to_goal(sim))
-                out = run_episode(make_agent("copi-learnt", caps), sim, sensing=level,
-                                  max_steps=limit)  # fmt: skip
-                won[str(k)] = out.outcome == "success"
-            done[key] = won
+            done[key] = episodes_won(lambda: make_agent("copi-learnt", caps), fam, level,
+                                     episodes)  # fmt: skip
             cache.write_text(json.dumps(done))
     succ = {tuple(key.split("/")): {int(k): v for k, v in w.items()} for key, w in done.items()}
     rate = {key: float(np.mean(list(w.values()))) for key, w in succ.items()}
@@ -134,39 +142,23 @@ def seed_spread(bench: Path, episodes: int, games: int) -> dict[tuple[str, int, 
     survival per game of the chauffeur's: ``{(config, seed, family or "game"): {k: won}}``
     (seed 0's in-family and mix rows are in the store), cached in ``bench``."""
     from copi.baselines import PPOAgent
-    from copi.experiments import run_episode
-    from copi.experiments._episode import optimal_to_goal
-    from copi.experiments.benchmark import benchmark_max_steps
-    from copi.experiments.navigation import draw_episode
-    from copi.experiments.pursuit import PursuitConfig, run_game
+    from copi.experiments.pursuit import PursuitConfig
 
     cache = bench / "rl-seeds.json"
-    done = json.loads(cache.read_text()) if cache.is_file() else {}
     for path in sorted(SEEDS.glob("ppo-*-s*.npz")):
         config, seed = path.stem.removeprefix("ppo-").rsplit("-s", 1)
-        where = {"mix": FAMILIES, "chauffeur": ("game",)}.get(config, (config,))
-        if config not in (*FAMILIES, "mix", "chauffeur"):
+        if config == "chauffeur":
+            cfg = PursuitConfig(capabilities=None, evader="ppo-chauffeur", games=games, seed=0)
+            play(cache, f"{config}/{seed}/game", cfg, games, PPOAgent(weights=str(path)))
             continue
-        for fam in where:
+        done = json.loads(cache.read_text()) if cache.is_file() else {}
+        for fam in FAMILIES if config == "mix" else (config,) if config in FAMILIES else ():
             key = f"{config}/{seed}" if config in FAMILIES else f"{config}/{seed}/{fam}"
-            n = games if fam == "game" else episodes
-            if len(done.get(key, {})) >= n:
-                continue
-            won = {}
-            for k in range(n):
-                if fam == "game":
-                    cfg = PursuitConfig(capabilities=None, evader="ppo-chauffeur", games=n,
-                                        seed=0)  # fmt: skip
-                    won[str(k)] = run_game(cfg, k, PPOAgent(weights=str(path))).outcome \
-                        == "escaped"  # fmt: skip
-                    continue
-                sim = draw_episode(fam, k, 0)
-                limit = benchmark_max_steps(optimal_to_goal(sim))
-                out = run_episode(PPOAgent(weights=str(path)), sim, sensing="map",
-                                  max_steps=limit)  # fmt: skip
-                won[str(k)] = out.outcome == "success"
-            done[key] = won
-            cache.write_text(json.dumps(done))
+            if len(done.get(key, {})) < episodes:
+                done[key] = episodes_won(lambda p=path: PPOAgent(weights=str(p)), fam, "map",
+                                         episodes)  # fmt: skip
+                cache.write_text(json.dumps(done))
+    done = json.loads(cache.read_text()) if cache.is_file() else {}
     spread = {}
     for key, w in done.items():
         parts = key.split("/")

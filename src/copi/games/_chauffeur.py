@@ -88,11 +88,9 @@ def _relative(
     p: NDArray[np.float64], heading: float, e: NDArray[np.float64]
 ) -> tuple[float, float]:
     """The evader in the pursuer's frame: (x lateral, to the right; y forward)."""
-    dx, dy = e[0] - p[0], e[1] - p[1]
-    c, s = math.cos(heading), math.sin(heading)
-    forward = dx * c + dy * s
-    right = dx * s - dy * c
-    return right, forward
+    right, forward = _k.relative(float(p[0]), float(p[1]), float(heading), float(e[0]),
+                                 float(e[1]))  # fmt: skip
+    return float(right), float(forward)
 
 
 def isaacs_control(

@@ -17,13 +17,19 @@ from copi.geometry._kernels import _move_one
 
 
 @njit(cache=True)
+def relative(px, py, heading, ex, ey):  # type: ignore[no-untyped-def]
+    """The evader at (ex, ey) in the frame of the car at (px, py, heading): (x to the
+    right, y forward)."""
+    dx, dy = ex - px, ey - py
+    c, s = math.cos(heading), math.sin(heading)
+    return dx * s - dy * c, dx * c + dy * s
+
+
+@njit(cache=True)
 def isaacs_u(px, py, heading, ex, ey, turn_radius, dt_turn):  # type: ignore[no-untyped-def]
     """Isaacs' control u for the car at (px, py, heading) and the evader at (ex, ey);
     see :func:`copi.games.isaacs_control`."""
-    dx, dy = ex - px, ey - py
-    c, s = math.cos(heading), math.sin(heading)
-    y = dx * c + dy * s  # forward
-    x = dx * s - dy * c  # to the right
+    x, y = relative(px, py, heading, ex, ey)
     if (x - turn_radius) ** 2 + y * y < turn_radius**2:
         return 1.0  # inside the right turning circle: swerve left, away
     if (x + turn_radius) ** 2 + y * y < turn_radius**2:

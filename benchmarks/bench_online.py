@@ -69,7 +69,7 @@ def main() -> bool:
 
     def one_decision(a: LearntAgent) -> Callable[[], None]:
         """One of ``a``'s decisions (the kernel alone) on the next stored reading."""
-        args = (a._nodes, a._prior, a._net)
+        args = (a._nodes_t, a._prior, a._net)
 
         def decide() -> None:
             k = next(j) % 2000

@@ -18,6 +18,7 @@ from copi.experiments.navigation import draw_episode
 from copi.learning import Capabilities, LearnParams, learn, simulated_steps
 from copi.learning._safety import (
     SafetyModel,
+    kernel_net,
     predict,
     safety_features,
     safety_probabilities,
@@ -39,7 +40,7 @@ def _net(seed: int, hidden: int = 5, rays: int = 32) -> np.ndarray:
 
 def _probs(s: np.ndarray, prev: np.ndarray, net: np.ndarray, n_dir: int = 16) -> np.ndarray:
     out = np.empty(n_dir + 1)
-    safety_probabilities(s, prev, net, n_dir, np.empty(8 * len(s)), out)
+    safety_probabilities(s, prev, kernel_net(net), n_dir, np.empty(8 * len(s)), out)
     return out
 
 
@@ -152,7 +153,7 @@ def test_scoring_only_the_promising_directions_chooses_as_scoring_all(learnt, da
     for lazy in (True, False):
         out, p = np.empty(5), np.empty(17)
         _kernels.decide_learnt(
-            s, prev, static, agent._nodes, agent._prior, net, aim[0], aim[1], 5.0, 1.05,
+            s, prev, static, agent._nodes_t, agent._prior, net, aim[0], aim[1], 5.0, 1.05,
             2.0, agent.beta, False, agent._cos, agent._sin, 10.0, np.empty(8 * 32), p, out,
             agent._landmarks, prev_landmark, keep, persist, lazy,
         )  # fmt: skip
@@ -179,7 +180,7 @@ def test_a_batch_decides_as_one_agent_at_a_time(learnt) -> None:
     for i in range(100):
         out, p = np.empty(5), np.empty(17)
         _kernels.decide_learnt(
-            s[i], prev[i], static[i], agent._nodes, agent._prior, agent._net, want[i, 0],
+            s[i], prev[i], static[i], agent._nodes_t, agent._prior, agent._net, want[i, 0],
             want[i, 1], reach[i], 1.05, 2.0, 0.5, False, agent._cos, agent._sin, 10.0,
             np.empty(256), p, out, agent._landmarks, -1, -1, 0.0,
         )  # fmt: skip
@@ -205,7 +206,7 @@ def test_a_policy_lasts_while_the_reading_stays_within_its_landmark(learnt) -> N
     def choose(prev_landmark: int, keep: int, persist: float) -> int:
         out, p = np.empty(5), np.empty(17)
         _kernels.decide_learnt(
-            s, s, np.full(32, np.inf), agent._nodes, agent._prior, agent._net, aim[0], aim[1],
+            s, s, np.full(32, np.inf), agent._nodes_t, agent._prior, agent._net, aim[0], aim[1],
             5.0, 1.05, 2.0, 0.0, False, agent._cos, agent._sin, 10.0, np.empty(256), p, out,
             agent._landmarks, prev_landmark, keep, persist,
         )  # fmt: skip

@@ -164,7 +164,7 @@ class PolicyWeights:
 
     def __post_init__(self) -> None:
         _check_layers(self.layers, self.n_rays, "the policy")
-        flat = np.concatenate([np.r_[w.ravel(), b] for w, b in self.layers])
+        flat = np.concatenate([np.r_[w.T.ravel(), b] for w, b in self.layers])  # input-major
         shapes = np.array([w.shape for w, _ in self.layers], dtype=np.int64)
         object.__setattr__(self, "_flat", np.ascontiguousarray(flat, dtype=np.float64))
         object.__setattr__(self, "_shapes", shapes)
@@ -196,20 +196,13 @@ class PolicyWeights:
         return h
 
 
-@numba.njit(cache=True, inline="always", fastmath={"reassoc", "contract", "nsz"})
-def _dot(w, h, cols):  # type: ignore[no-untyped-def]
-    s = 0.0
-    for j in range(cols):
-        s += w[j] * h[j]
-    return s
-
-
-@numba.njit(cache=True, fastmath={"reassoc", "contract", "nsz"})
+@numba.njit(cache=True)
 def _forward(flat, shapes, x, buf, out):  # type: ignore[no-untyped-def]
     """The actor's forward pass over packed layers (numba: a Python loop of numpy calls
-    costs ~2 us a layer, over the 10 us a decision may take). The sums are reassociated,
-    so that they vectorise: the last bits of a velocity change, not the decisions (tested
-    against the torch policy)."""
+    costs ~2 us a layer, over the 10 us a decision may take). Each layer's weights are
+    packed input-major (W transposed), so that one input updates every unit at once:
+    the loop over units vectorises while each unit's sum keeps its order (inputs 0, 1,
+    ..., then the bias), the same on every processor (no fastmath)."""
     m = x.shape[0]
     a = buf[0]
     b = buf[1]
@@ -221,7 +214,14 @@ def _forward(flat, shapes, x, buf, out):  # type: ignore[no-untyped-def]
         cols = shapes[li, 1]
         bias = off + rows * cols
         for i in range(rows):
-            s = flat[bias + i] + _dot(flat[off + i * cols : off + (i + 1) * cols], a, cols)
+            b[i] = 0.0
+        for j in range(cols):
+            aj = a[j]
+            w = flat[off + j * rows : off + (j + 1) * rows]
+            for i in range(rows):
+                b[i] += w[i] * aj
+        for i in range(rows):
+            s = flat[bias + i] + b[i]
             b[i] = math.tanh(s) if li < nl - 1 else s
         off += rows * cols + rows
         a, b = b, a
@@ -366,7 +366,7 @@ class PPOAgent(Steered):
                 f"{task.n_rays}"
             )
         self._prev: NDArray[np.float64] | None = None
-        self._node = np.zeros((1, task.n_rays))
+        self._node = np.zeros((task.n_rays, 1))  # one node at 0, transposed (the kernels' layout)
         self._no_static = np.full(task.n_rays, np.inf)
 
     def steer(

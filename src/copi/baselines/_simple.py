@@ -63,7 +63,7 @@ class CompassGuard(Steered):
 
     def reset(self, task: Task) -> None:
         super().reset(task)
-        self._node = np.zeros((1, task.n_rays))
+        self._node = np.zeros((task.n_rays, 1))  # one node at 0, transposed (the kernels' layout)
         self._no_static = np.full(task.n_rays, np.inf)
 
     def steer(

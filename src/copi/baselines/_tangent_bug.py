@@ -152,7 +152,7 @@ class TangentBug(Steered):
             p = pts[int(np.argmin(np.hypot(*pts.T)))]
             # Follow on the side whose tangent points more towards the goal.
             left = _rotate(p, math.pi / 2)
-            self._side = 1.0 if float(left @ g) >= 0 else -1.0
+            self._side = 1.0 if left[0] * g[0] + left[1] * g[1] >= 0 else -1.0
         return self._follow(pts, g)
 
     def _follow(self, pts: NDArray[np.float64], g: NDArray[np.float64]) -> NDArray[np.float64]:

@@ -117,7 +117,7 @@ class VFH(Steered):
         k = int(round(a / _TWO_PI * self.sectors)) % self.sectors
         speed = 1.0 - min(h[k], 1.0)
         v = np.array([math.cos(a), math.sin(a)])
-        along = float(v @ u) * reach
+        along = (v[0] * u[0] + v[1] * u[1]) * reach  # not v @ u: BLAS rounds per processor
         if along > 0:
             speed = min(speed, along)
         return v * max(speed, 0.1)

@@ -9,7 +9,7 @@ import numpy as np
 from copi.errors import InvalidArgumentError
 from copi.geometry._arrays import FloatArray, as_points
 
-__all__ = ["as_ring", "orient", "ring_crossings", "ring_segments", "signed_area"]
+__all__ = ["as_ring", "orient", "ring_crossings", "ring_segments", "signed_area", "turned"]
 
 
 def as_ring(coords: Any, name: str = "ring") -> FloatArray:
@@ -45,7 +45,16 @@ def signed_area(ring: FloatArray) -> float:
     """
     r = np.asarray(ring, dtype=np.float64)
     x, y = r[:, 0], r[:, 1]
-    return float(0.5 * (np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y)))
+    # numpy's sums, in their fixed order: np.dot is BLAS's, summed in the order of the
+    # kernel BLAS picks for the processor
+    return float(0.5 * ((x * np.roll(y, -1)).sum() - (np.roll(x, -1) * y).sum()))
+
+
+def turned(points: FloatArray, rot: FloatArray) -> FloatArray:
+    """``points @ rot.T`` for 2-d points, each coordinate one product and one sum (a
+    matrix product is BLAS's, whose rounding depends on the processor: the same seed
+    must draw the same world on every machine)."""
+    return points[:, :1] * rot[:, 0] + points[:, 1:] * rot[:, 1]
 
 
 def orient(ring: FloatArray, *, ccw: bool = True) -> FloatArray:

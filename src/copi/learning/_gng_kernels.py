@@ -17,36 +17,53 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-# Reassociation lets LLVM vectorise the distance sums (SIMD); infinities are kept
-# meaningful (no "ninf"/"nnan"), since the searches start from inf.
-FAST = {"reassoc", "contract", "arcp", "nsz", "afn"}
+# No fastmath: every sum runs in the order written, so that the map is the same on every
+# processor (reassociation let LLVM sum in the order of the target's SIMD width and
+# contraction fuse multiply-adds where the target has FMA: the same seed grew a
+# different map, and so different landmarks, on different machines). The searches run
+# over a transposed copy of the positions instead, which vectorises across nodes with
+# each node's sum in its own fixed order.
 
 
-@njit(cache=True, inline="always", fastmath=FAST)
-def _nearest_two(x, w, n):  # type: ignore[no-untyped-def]
-    """Indices and squared distances of the nearest and second-nearest live nodes.
+@njit(cache=True, inline="always")
+def _nearest_two(x, wt, n, acc):  # type: ignore[no-untyped-def]
+    """Indices and squared distances of the nearest and second-nearest live nodes;
+    ``wt`` (d, cap) holds the positions transposed, ``acc`` (cap,) is scratch.
 
-    Full distances, no early exit: a straight 32-term sum vectorises, and measured faster
-    than abandoning partial sums (which branch every few terms)."""
+    Each node's squared distance is summed over components 0, 1, ... in turn (the value
+    a plain loop over that node gives), the loop running across nodes so that it
+    vectorises without reordering any sum."""
     d = x.shape[0]
+    for i in range(n):
+        acc[i] = 0.0
+    for j in range(d):
+        xj = x[j]
+        row = wt[j]
+        for i in range(n):
+            diff = xj - row[i]
+            acc[i] += diff * diff
     b1 = -1
     b2 = -1
     d1 = np.inf
     d2 = np.inf
     for i in range(n):
-        acc = 0.0
-        for j in range(d):
-            diff = x[j] - w[i, j]
-            acc += diff * diff
-        if acc < d1:
+        a = acc[i]
+        if a < d1:
             b2 = b1
             d2 = d1
             b1 = i
-            d1 = acc
-        elif acc < d2:
+            d1 = a
+        elif a < d2:
             b2 = i
-            d2 = acc
+            d2 = a
     return b1, d1, b2, d2
+
+
+@njit(cache=True, inline="always")
+def _sync(wt, w, i):  # type: ignore[no-untyped-def]
+    """Copy node i's position into the transposed copy."""
+    for j in range(w.shape[1]):
+        wt[j, i] = w[i, j]
 
 
 @njit(cache=True, inline="always")
@@ -99,7 +116,7 @@ def _remove_node(r, w, err, age, nbr, deg, n):  # type: ignore[no-untyped-def]
     return last
 
 
-@njit(cache=True, fastmath=FAST)
+@njit(cache=True)
 def gng_run(  # type: ignore[no-untyped-def]
     x, order, w, err, age, nbr, deg, n, seen, max_nodes, eps_b, eps_n, lam, max_age, alpha, decay
 ):
@@ -125,19 +142,23 @@ def gng_run(  # type: ignore[no-untyped-def]
     dim = x.shape[1]
     scale = 1.0
     expired = np.empty(w.shape[0], dtype=np.int64)
+    wt = np.ascontiguousarray(w.T)  # positions transposed, kept in step with w
+    acc = np.empty(w.shape[0])
     for t in range(order.shape[0]):
         xi = x[order[t]]
-        s1, d1, s2, _ = _nearest_two(xi, w, n)
+        s1, d1, s2, _ = _nearest_two(xi, wt, n, acc)
         seen += 1
         err[s1] += d1 / scale
         for j in range(dim):
             w[s1, j] += eps_b * (xi[j] - w[s1, j])
+        _sync(wt, w, s1)
         for idx in range(deg[s1]):
             k = nbr[s1, idx]
             age[s1, k] += 1
             age[k, s1] += 1
             for j in range(dim):
                 w[k, j] += eps_n * (xi[j] - w[k, j])
+            _sync(wt, w, k)
         if age[s1, s2] < 0:
             _link(s1, s2, nbr, deg)
         age[s1, s2] = 0
@@ -166,6 +187,8 @@ def gng_run(  # type: ignore[no-untyped-def]
             if deg[k] == 0:
                 last = n - 1
                 n = _remove_node(k, w, err, age, nbr, deg, n)
+                if k < n:
+                    _sync(wt, w, k)  # the last node moved into slot k
                 if s1 == last:
                     s1 = k
                 for e in range(m):
@@ -186,6 +209,7 @@ def gng_run(  # type: ignore[no-untyped-def]
                 n += 1
                 for j in range(dim):
                     w[r, j] = 0.5 * (w[q, j] + w[f, j])
+                _sync(wt, w, r)
                 _unlink(q, f, age, nbr, deg)
                 age[q, r] = 0
                 age[r, q] = 0
@@ -207,10 +231,12 @@ def gng_run(  # type: ignore[no-untyped-def]
     return n, seen
 
 
-@njit(cache=True, fastmath=FAST)
+@njit(cache=True)
 def nearest(x, w, n, out_idx, out_d2):  # type: ignore[no-untyped-def]
     """Nearest live node of each row of x, and the squared distance."""
+    wt = np.ascontiguousarray(w[:n].T)
+    acc = np.empty(n)
     for t in range(x.shape[0]):
-        b, d, _, _ = _nearest_two(x[t], w, n)
+        b, d, _, _ = _nearest_two(x[t], wt, n, acc)
         out_idx[t] = b
         out_d2[t] = d

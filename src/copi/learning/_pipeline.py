@@ -203,10 +203,10 @@ def learn(params: LearnParams | None = None, *, progress: Progress | None = None
     map_seed = p.seed if p.map_seed is None else p.map_seed
     gng = GrowingNeuralGas(p.max_nodes, epochs=p.epochs, random_state=map_seed).fit(contexts)
     gng.prune_unused(contexts)  # nodes that stand for no context (none on maps of readings)
-    to_nodes = gng.transform(contexts)
-    nearest = to_nodes.argmin(1)
-    dist = to_nodes[np.arange(len(nearest)), nearest]
-    del to_nodes
+    # the compiled search, not transform(): its matrix product is BLAS's, summed in an
+    # order that depends on the processor
+    nearest, d2 = gng._nearest(contexts)
+    dist = np.sqrt(d2)
     qe = float(dist.mean())
     # Online, a reading farther than this from every node is "unfamiliar" (§III): the
     # distance that 99 % of the training readings are within.

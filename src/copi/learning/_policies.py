@@ -155,7 +155,7 @@ def _pack(
             if p is not None and len(p) >= 2:
                 passable[i, j] = True
                 step = p[1] - p[0]
-                actions[i, j] = step / np.linalg.norm(step)
+                actions[i, j] = step / np.hypot(step[0], step[1])  # not norm: BLAS's dot
                 lengths[i, j] = float(np.hypot(*np.diff(p, axis=0).T).sum())
                 chunks.append(p)
                 start.append(start[-1] + len(p))
@@ -332,7 +332,8 @@ class ActionPriors:
         m = np.asarray(moves_template_frame, dtype=np.float64)
         length = np.hypot(m[:, 0], m[:, 1])
         ok = length >= min_step
-        d = np.argmax(m[ok] @ dirs.T, axis=1)
+        # products summed elementwise, not by BLAS (whose order is the processor's)
+        d = np.argmax((m[ok][:, None, :] * dirs[None]).sum(-1), axis=1)
         counts = np.zeros((n_templates, n_directions))
         np.add.at(counts, (np.asarray(template)[ok], d), 1.0)
         probs = (counts + 1.0) / (counts.sum(1, keepdims=True) + n_directions)

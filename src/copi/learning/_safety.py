@@ -40,6 +40,7 @@ from copi.world import RandomWalk, RangeSensor, Simulator, random_world, sample_
 __all__ = [
     "SafetyModel",
     "feature_block",
+    "kernel_net",
     "learn_safety",
     "probe_states",
     "safety_features",
@@ -99,7 +100,7 @@ def safety_features(
     return out
 
 
-@njit(cache=True, fastmath=True)
+@njit(cache=True)
 def ring_features(s, prev, feat):  # type: ignore[no-untyped-def]
     """The feature blocks of reading ``s`` after ``prev`` into ``feat`` (8 n_rays), each
     block written twice, so that turning the reading is a slice (see
@@ -112,42 +113,65 @@ def ring_features(s, prev, feat):  # type: ignore[no-untyped-def]
             feat[2 * b * n + n + i] = v
 
 
-@njit(cache=True, fastmath=True)
-def safety_of(net, k, shift, feat, n):  # type: ignore[no-untyped-def]
-    """P(safe) by network ``k`` of ``net`` (0: a move along ray 0, 1: waiting) of the
-    features in ``feat`` (:func:`ring_features`) turned by ``shift`` rays."""
-    h = net.shape[1] - 1
-    z2 = net[k, h, 0]
+def kernel_net(net: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The networks ``net`` (2, h + 1, 1 + 4 n_rays), as :class:`SafetyModel` holds them,
+    laid out for the kernels: (2, 4 n_rays + 3, h), row 0 the hidden biases, row 1 + i
+    every hidden unit's weight of feature i, row 4 n_rays + 1 the output weights, and
+    [4 n_rays + 2, 0] the output bias. Feature-major, so that one feature updates every
+    hidden unit at once: the loop over units vectorises while each unit's sum keeps its
+    order (bias, then the features in turn) on every processor."""
+    net = np.asarray(net, dtype=np.float64)
+    k, h1, f1 = net.shape
+    h = h1 - 1
+    out = np.zeros((k, f1 + 2, h))
+    out[:, :f1, :] = net[:, :h, :].transpose(0, 2, 1)
+    out[:, f1, :] = net[:, h, 1 : 1 + h]
+    out[:, f1 + 1, 0] = net[:, h, 0]
+    return np.ascontiguousarray(out)
+
+
+@njit(cache=True)
+def safety_of(net_t, k, shift, feat, n):  # type: ignore[no-untyped-def]
+    """P(safe) by network ``k`` of ``net_t`` (:func:`kernel_net`; 0: a move along ray 0,
+    1: waiting) of the features in ``feat`` (:func:`ring_features`) turned by ``shift``
+    rays. No fastmath: every sum runs in the order written, the same on every processor."""
+    h = net_t.shape[2]
+    last = net_t.shape[1] - 2
+    z = net_t[k, 0].copy()
+    for b in range(N_BLOCKS):
+        w0 = 1 + b * n
+        f0 = 2 * b * n + shift
+        for j in range(n):
+            f = feat[f0 + j]
+            row = net_t[k, w0 + j]
+            for u in range(h):
+                z[u] += row[u] * f
+    z2 = net_t[k, last + 1, 0]
+    out_w = net_t[k, last]
     for u in range(h):
-        z = net[k, u, 0]
-        for b in range(N_BLOCKS):
-            w0 = 1 + b * n
-            f0 = 2 * b * n + shift
-            for j in range(n):
-                z += net[k, u, w0 + j] * feat[f0 + j]
-        if z > 0.0:
-            z2 += net[k, h, 1 + u] * z
+        if z[u] > 0.0:
+            z2 += out_w[u] * z[u]
     return 1.0 / (1.0 + math.exp(-z2))
 
 
-@njit(cache=True, fastmath=True)
-def safety_probabilities(s, prev, net, n_dir, feat, out):  # type: ignore[no-untyped-def]
+@njit(cache=True)
+def safety_probabilities(s, prev, net_t, n_dir, feat, out):  # type: ignore[no-untyped-def]
     """P(safe) of each of ``n_dir`` compass directions (out[:n_dir]) and of waiting
     (out[n_dir]) for reading ``s`` after ``prev``.
 
-    ``net`` (2, h + 1, 1 + 4 n_rays): the direction model and the wait model, each a
-    one-hidden-layer ReLU network: rows 0..h-1 are [bias, weights] of the hidden units,
-    row h is [output bias, output weights, 0...]. Direction d is judged on the features
-    turned so that its ray is ray 0; waiting in the frame of direction 0. ``feat`` is
-    scratch of length 8 n_rays (each block written twice, so that a turn is a slice).
-    This is the model's whole evaluation, compiled: a decision budget of a few µs
-    leaves no room for numpy's per-call overhead on 17 small products."""
+    ``net_t``: :func:`kernel_net` of the direction model and the wait model
+    (:attr:`SafetyModel.net`), each a one-hidden-layer ReLU network. Direction d is
+    judged on the features turned so that its ray is ray 0; waiting in the frame of
+    direction 0. ``feat`` is scratch of length 8 n_rays (each block written twice, so
+    that a turn is a slice). This is the model's whole evaluation, compiled: a decision
+    budget of a few µs leaves no room for numpy's per-call overhead on 17 small
+    products."""
     n = s.shape[0]
     per = n // n_dir
     ring_features(s, prev, feat)
     for d in range(n_dir):
-        out[d] = safety_of(net, 0, d * per, feat, n)
-    out[n_dir] = safety_of(net, 1, 0, feat, n)
+        out[d] = safety_of(net_t, 0, d * per, feat, n)
+    out[n_dir] = safety_of(net_t, 1, 0, feat, n)
 
 
 @dataclass(frozen=True, eq=False)
@@ -155,8 +179,10 @@ class SafetyModel:
     """What the probes taught: the safety model's weights and per-template priors."""
 
     net: NDArray[np.float64]
-    """(2, h + 1, 1 + 4 n_rays): the networks judging a move along ray 0, and waiting
-    (see :func:`safety_probabilities`)."""
+    """(2, h + 1, 1 + 4 n_rays): the networks judging a move along ray 0, and waiting,
+    each a one-hidden-layer ReLU network: rows 0..h-1 are [bias, weights] of the hidden
+    units, row h is [output bias, output weights, 0...] (the kernels take it as
+    :func:`kernel_net` lays it out; see :func:`safety_probabilities`)."""
     template_safe: NDArray[np.float64]
     """(n_templates, n_directions): Laplace-smoothed P(safe | template, direction in the
     template's frame)."""

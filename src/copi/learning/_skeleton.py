@@ -10,6 +10,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import shortest_path
+from scipy.spatial.distance import cdist
 
 from copi.errors import InvalidArgumentError
 
@@ -69,6 +70,14 @@ def _graph_arrays(graph: Any) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     )
 
 
+def _length(v: NDArray[np.float64]) -> float:
+    """Euclidean length of ``v``, summed by numpy's fixed pairwise order: not by
+    ``np.linalg.norm``, whose dot product is BLAS's, summed in the order of the kernel
+    BLAS picks for the processor (so edge lengths, and which of two near-equal edges is
+    contracted first, moved with the machine)."""
+    return float(np.sqrt((v * v).sum()))
+
+
 def _contract(pos: NDArray[np.float64], edges: NDArray[np.int64]):  # type: ignore[no-untyped-def]
     """Contract shortest edges until none is left, tracking the Hausdorff distance.
 
@@ -88,11 +97,10 @@ def _contract(pos: NDArray[np.float64], edges: NDArray[np.int64]):  # type: igno
             continue
         adj[u].add(v)
         adj[v].add(u)
-        heap.append((float(np.linalg.norm(pos[u] - pos[v])), min(u, v), max(u, v)))
+        heap.append((_length(pos[u] - pos[v]), min(u, v), max(u, v)))
     heapq.heapify(heap)
-    sq = (pos**2).sum(1)
     dist = np.full((n, cap), np.inf)
-    dist[:, :n] = np.sqrt(np.maximum(sq[:, None] - 2 * pos @ pos.T + sq[None, :], 0.0))
+    dist[:, :n] = cdist(pos, pos)  # differences first: no BLAS (see _length)
     np.fill_diagonal(dist[:, :n], 0.0)
     near = np.zeros(n)  # distance from each original to the nearest live node
     near_of = np.arange(n)  # ... and which node that is
@@ -132,7 +140,7 @@ def _contract(pos: NDArray[np.float64], edges: NDArray[np.int64]):  # type: igno
                         adj[b].add(w)
                         adj[w].add(b)
                         heapq.heappush(
-                            heap, (float(np.linalg.norm(p[w] - p[b])), min(w, b), max(w, b))
+                            heap, (_length(p[w] - p[b]), min(w, b), max(w, b))
                         )
             adj[a] = set()
         merges.append((u, v, w))

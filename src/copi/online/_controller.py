@@ -139,6 +139,7 @@ class ContextController:
         self._no_static = np.full(self.n_rays, np.inf)  # no map: every hit counts
         self._out = np.empty(5)
         self._nodes = np.ascontiguousarray(caps.nodes, dtype=np.float64)
+        self._nodes_t = np.ascontiguousarray(self._nodes.T)  # the kernels' layout (dim, n)
         self._nodes32 = self._nodes.astype(np.float32)
         self._norms32 = (self._nodes32 * self._nodes32).sum(1)
         self._landmark = caps.landmarks.node_landmark
@@ -233,10 +234,10 @@ class ContextController:
             )
         reach = _reach(reach)
         out = self._out
-        nodes, cand, ok = self._nodes, self._cand, self._ok
+        nodes_t, cand, ok = self._nodes_t, self._cand, self._ok
         st = self._no_static if static is None else self._static_shape(static)
         _kernels.decide(
-            s, st, nodes, cand, ok, want[0], want[1], reach, self.guard,
+            s, st, nodes_t, cand, ok, want[0], want[1], reach, self.guard,
             self._cos, self._sin, self.max_range, out,
         )  # fmt: skip
         if out[2] == -1.0:
@@ -253,8 +254,8 @@ class ContextController:
             if self.continual:
                 nodes, cand, ok = self._learn_unfamiliar(s)
                 _kernels.decide(
-                    s, st, nodes, cand, ok, want[0], want[1], reach, self.guard,
-                    self._cos, self._sin, self.max_range, out,
+                    s, st, np.ascontiguousarray(nodes.T), cand, ok, want[0], want[1], reach,
+                    self.guard, self._cos, self._sin, self.max_range, out,
                 )  # fmt: skip
         action = out[:2].copy()
         if not explain:
@@ -322,7 +323,7 @@ class ContextController:
         # kernel then measures the few close nodes exactly.
         screen = screen_distances(s, self._nodes32, self._norms32)
         _kernels.decide_batch(
-            s, np.ascontiguousarray(st), self._nodes, screen, self._cand, self._ok, want, r,
+            s, np.ascontiguousarray(st), self._nodes_t, screen, self._cand, self._ok, want, r,
             self.guard, self._cos, self._sin, self.max_range, out,
         )  # fmt: skip
         if (out[:, 2] < 0).any():

@@ -13,29 +13,46 @@ import math
 import numpy as np
 from numba import njit
 
-from copi.learning._gng_kernels import FAST
 from copi.learning._safety import ring_features, safety_of, safety_probabilities
 
+# No fastmath anywhere here: every sum runs in the order written, so that a decision is
+# the same on every processor (reassociation lets LLVM pick the summation order of the
+# target's SIMD width, and contraction fuses multiply-adds only where the target has
+# FMA; either made the nearest node, and so every result downstream, depend on the
+# machine the kernels were compiled on).
 
-@njit(cache=True, inline="always", fastmath=FAST)
-def _exact(x, nodes, i):  # type: ignore[no-untyped-def]
-    """Squared distance from x to node i (the one formula every path uses)."""
+
+@njit(cache=True, inline="always")
+def _exact(x, nodes_t, i):  # type: ignore[no-untyped-def]
+    """Squared distance from x to node i of the transposed nodes ``nodes_t`` (dim, n):
+    the sum over components in order 0, 1, ..., the one formula every path uses."""
     e = 0.0
     for j in range(x.shape[0]):
-        diff = x[j] - nodes[i, j]
+        diff = x[j] - nodes_t[j, i]
         e += diff * diff
     return e
 
 
-@njit(cache=True, inline="always", fastmath=FAST)
-def _nearest(x, nodes):  # type: ignore[no-untyped-def]
-    """Nearest node: argmin of :func:`_exact`, ties to the lower index."""
+@njit(cache=True, inline="always")
+def _nearest(x, nodes_t):  # type: ignore[no-untyped-def]
+    """Nearest node: argmin of :func:`_exact`, ties to the lower index.
+
+    The nodes are transposed (``nodes_t`` (dim, n)) so that the loop runs across nodes,
+    one component at a time: each node's sum keeps :func:`_exact`'s order (bitwise the
+    same value) while the loop vectorises without any reassociation."""
+    n = nodes_t.shape[1]
+    acc = np.zeros(n)
+    for j in range(x.shape[0]):
+        xj = x[j]
+        row = nodes_t[j]
+        for i in range(n):
+            diff = xj - row[i]
+            acc[i] += diff * diff
     best = -1
     bd = np.inf
-    for i in range(nodes.shape[0]):
-        e = _exact(x, nodes, i)
-        if e < bd:
-            bd = e
+    for i in range(n):
+        if acc[i] < bd:
+            bd = acc[i]
             best = i
     return best, bd
 
@@ -61,23 +78,21 @@ def _context(s, prev, dim):  # type: ignore[no-untyped-def]
     return q
 
 
-@njit(cache=True, inline="always", fastmath=FAST)
-def _nearest_context(s, prev, nodes):  # type: ignore[no-untyped-def]
+@njit(cache=True, inline="always")
+def _nearest_context(s, prev, nodes_t):  # type: ignore[no-untyped-def]
     """:func:`_nearest` of reading ``s``'s context: the reading itself, or with nodes of
     twice its length, [s, clip(s - prev)]."""
-    if nodes.shape[1] == s.shape[0]:
-        return _nearest(s, nodes)
-    return _nearest(_context(s, prev, nodes.shape[1]), nodes)
+    if nodes_t.shape[0] == s.shape[0]:
+        return _nearest(s, nodes_t)
+    return _nearest(_context(s, prev, nodes_t.shape[0]), nodes_t)
 
 
-# fastmath on the callers too: numba inlines _nearest at the IR level, where the
-# caller's flags are the ones that count (without them the distance sums do not
-# vectorise and a decision takes twice as long).
-@njit(cache=True, fastmath=FAST)
+@njit(cache=True)
 def decide(  # type: ignore[no-untyped-def]
-    s, static, nodes, cand, ok, wx, wy, reach, guard, cos, sin, max_range, out
+    s, static, nodes_t, cand, ok, wx, wy, reach, guard, cos, sin, max_range, out
 ):
-    """One decision for reading ``s``: :func:`_nearest`, then :func:`_choose`.
+    """One decision for reading ``s``: :func:`_nearest` among the nodes ``nodes_t``
+    (transposed: dim x n), then :func:`_choose`.
 
     Checks its inputs first, in the same pass (cheaper than numpy's checks for one
     reading): out[2] = -1 for a reading that is not finite and >= 0, -2 for a static
@@ -89,7 +104,7 @@ def decide(  # type: ignore[no-untyped-def]
         if not static[i] >= 0.0:
             out[2] = -2.0
             return
-    node, d2 = _nearest(s, nodes)
+    node, d2 = _nearest(s, nodes_t)
     _choose(s, static, node, d2, cand, ok, wx, wy, reach, guard, cos, sin, max_range, out)
 
 
@@ -166,7 +181,7 @@ def _escape(s, static, cos, sin, max_range, n, clear, roomy, out):  # type: igno
     return True
 
 
-@njit(cache=True, inline="always", fastmath=FAST)
+@njit(cache=True, inline="always")
 def _refused(s, static, cos, sin, max_range, ax, ay, score, reach, guard, wall):  # type: ignore[no-untyped-def]
     """Whether the guard refuses the step along (ax, ay) (alignment ``score`` with the
     desired direction): after it a moving hit nearer than ``guard``, or its path passing
@@ -200,7 +215,7 @@ def guard_verdicts(s, static, dirs, wx, wy, reach, guard, cos, sin, max_range, o
         out[k] = not refused
 
 
-@njit(cache=True, inline="always", fastmath=FAST)
+@njit(cache=True, inline="always")
 def _choose(  # type: ignore[no-untyped-def]
     s, static, node, d2, cand, ok, wx, wy, reach, guard, cos, sin, max_range, out
 ):
@@ -299,8 +314,8 @@ def _choose(  # type: ignore[no-untyped-def]
     out[4] = -3.0 - best if compass else best
 
 
-@njit(cache=True, inline="always", fastmath=FAST)
-def _screened_nearest(x, row, nodes):  # type: ignore[no-untyped-def]
+@njit(cache=True, inline="always")
+def _screened_nearest(x, row, nodes_t):  # type: ignore[no-untyped-def]
     """:func:`_nearest` with the search screened by ``row`` (approximate squared
     distances): every node within a wide margin of the screened minimum is measured
     with :func:`_exact`, so the choice is the one :func:`_nearest` makes."""
@@ -313,25 +328,25 @@ def _screened_nearest(x, row, nodes):  # type: ignore[no-untyped-def]
     bd = np.inf
     for i in range(row.shape[0]):
         if row[i] <= cut:
-            e = _exact(x, nodes, i)
+            e = _exact(x, nodes_t, i)
             if e < bd:
                 bd = e
                 node = i
     return node, bd
 
 
-@njit(cache=True, inline="always", fastmath=FAST)
-def _screened_nearest_context(s, prev, row, nodes):  # type: ignore[no-untyped-def]
+@njit(cache=True, inline="always")
+def _screened_nearest_context(s, prev, row, nodes_t):  # type: ignore[no-untyped-def]
     """:func:`_screened_nearest` of reading ``s``'s context (see
     :func:`_nearest_context`); ``row`` screens the contexts' distances."""
-    if nodes.shape[1] == s.shape[0]:
-        return _screened_nearest(s, row, nodes)
-    return _screened_nearest(_context(s, prev, nodes.shape[1]), row, nodes)
+    if nodes_t.shape[0] == s.shape[0]:
+        return _screened_nearest(s, row, nodes_t)
+    return _screened_nearest(_context(s, prev, nodes_t.shape[0]), row, nodes_t)
 
 
-@njit(cache=True, fastmath=FAST)
+@njit(cache=True)
 def decide_batch(  # type: ignore[no-untyped-def]
-    s, static, nodes, screen, cand, ok, want, reach, guard, cos, sin, max_range, out
+    s, static, nodes_t, screen, cand, ok, want, reach, guard, cos, sin, max_range, out
 ):
     """:func:`decide` for each row, out of shape (b, 5), with the nearest-node search
     screened by ``screen`` (b, n): approximate squared distances (a float32 matrix
@@ -346,16 +361,16 @@ def decide_batch(  # type: ignore[no-untyped-def]
         if not finite:
             out[b, 2] = -1.0
             continue
-        node, bd = _screened_nearest(x, screen[b], nodes)
+        node, bd = _screened_nearest(x, screen[b], nodes_t)
         _choose(
             x, static[b], node, bd, cand, ok, want[b, 0], want[b, 1], reach[b], guard,
             cos, sin, max_range, out[b],
         )  # fmt: skip
 
 
-@njit(cache=True, fastmath=FAST)
+@njit(cache=True)
 def decide_learnt(  # type: ignore[no-untyped-def]
-    s, prev, static, nodes, node_prior, net, wx, wy, reach, guard, alpha, beta, wait,
+    s, prev, static, nodes_t, node_prior, net, wx, wy, reach, guard, alpha, beta, wait,
     cos, sin, max_range, feat, p, out, node_landmark, prev_landmark, keep, persist,
     lazy=True,
 ):
@@ -364,7 +379,9 @@ def decide_learnt(  # type: ignore[no-untyped-def]
     together, the guard (as :func:`_choose`'s) kept as a filter.
 
     score(d) = cos(d, aim) + alpha log P(safe | reading turned to d) + beta log
-    P(safe | template, d through g). Waiting scores alpha log P(safe | wait). When the
+    P(safe | template, d through g), the networks ``net`` as
+    :func:`copi.learning._safety.kernel_net` lays them out and ``nodes_t`` the nodes
+    transposed (dim, n). Waiting scores alpha log P(safe | wait). When the
     guard leaves no direction, the agent waits if the model says waiting is safer than
     every move that does not run into a hit, else escapes where most room is.
     out = (ax, ay, node, d2, choice): choice d, -2 the escape, -4 waiting, -1 nothing.
@@ -383,7 +400,7 @@ def decide_learnt(  # type: ignore[no-untyped-def]
         p[d] = np.nan
     if not _learnt_inputs(s, prev, static, out):
         return
-    node, d2 = _nearest_context(s, prev, nodes)
+    node, d2 = _nearest_context(s, prev, nodes_t)
     k = keep if node < node_landmark.shape[0] and node_landmark[node] == prev_landmark else -1
     _learnt_choose(
         s, prev, static, node, d2, node_prior, net, wx, wy, reach, guard, alpha, beta, wait,
@@ -405,9 +422,9 @@ def _learnt_inputs(s, prev, static, out):  # type: ignore[no-untyped-def]
     return True
 
 
-@njit(cache=True, fastmath=FAST)
+@njit(cache=True)
 def decide_learnt_batch(  # type: ignore[no-untyped-def]
-    s, prev, static, nodes, screen, node_prior, net, want, reach, guard, alpha, beta, wait,
+    s, prev, static, nodes_t, screen, node_prior, net, want, reach, guard, alpha, beta, wait,
     cos, sin, max_range, feat, p, out,
 ):
     """:func:`decide_learnt` for each row (lazy), out of shape (b, 5), with the
@@ -416,7 +433,7 @@ def decide_learnt_batch(  # type: ignore[no-untyped-def]
         x = s[b]
         if not _learnt_inputs(x, prev[b], static[b], out[b]):
             continue
-        node, bd = _screened_nearest_context(x, prev[b], screen[b], nodes)
+        node, bd = _screened_nearest_context(x, prev[b], screen[b], nodes_t)
         _learnt_choose(
             x, prev[b], static[b], node, bd, node_prior, net, want[b, 0], want[b, 1],
             reach[b], guard, alpha, beta, wait, cos, sin, max_range, feat, p, out[b], True,
@@ -424,7 +441,7 @@ def decide_learnt_batch(  # type: ignore[no-untyped-def]
         )  # fmt: skip
 
 
-@njit(cache=True, fastmath=FAST)
+@njit(cache=True)
 def _learnt_choose(  # type: ignore[no-untyped-def]
     s, prev, static, node, d2, node_prior, net, wx, wy, reach, guard, alpha, beta, wait,
     cos, sin, max_range, feat, p, out, lazy, keep, persist,

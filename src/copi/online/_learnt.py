@@ -11,7 +11,7 @@ from numpy.typing import NDArray
 from copi.core import Agent, Observation, Task
 from copi.errors import InvalidArgumentError
 from copi.learning import Capabilities
-from copi.learning._safety import SafetyModel, template_directions
+from copi.learning._safety import SafetyModel, kernel_net, template_directions
 from copi.online import _kernels
 from copi.online._agent import Steering
 from copi.online._controller import ContextController, screen_distances
@@ -98,8 +98,9 @@ class LearntAgent(Agent):
         self.beta = float(beta)
         self.wait = bool(wait)
         self.model = model
-        self._net = np.ascontiguousarray(model.net, dtype=np.float64)
+        self._net = kernel_net(model.net)  # the kernels' layout
         self._nodes = np.ascontiguousarray(capabilities.nodes, dtype=np.float64)
+        self._nodes_t = np.ascontiguousarray(self._nodes.T)  # the kernels' layout (dim, n)
         self._prior = node_priors(capabilities, model)
         n = capabilities.n_rays
         a = 2 * np.pi * np.arange(n) / n
@@ -146,6 +147,7 @@ class LearntAgent(Agent):
         if not task.lifelong and self._growth is not None:  # grown contexts: one life only
             self._growth = None
             self._nodes = np.ascontiguousarray(self.capabilities.nodes, dtype=np.float64)
+            self._nodes_t = np.ascontiguousarray(self._nodes.T)
             self._prior = node_priors(self.capabilities, self.model)
             self._templates = np.asarray(self.capabilities.node_template, dtype=np.int64)
 
@@ -157,7 +159,7 @@ class LearntAgent(Agent):
         static = self._no_static if obs.static is None else obs.static
         out = self._out
         _kernels.decide_learnt(
-            s, prev, static, self._nodes, self._prior, self._net, desired[0], desired[1],
+            s, prev, static, self._nodes_t, self._prior, self._net, desired[0], desired[1],
             reach, self.guard, self.alpha, self.beta, self.wait, self._cos, self._sin,
             self.max_range, self._feat, self._p, out, self._landmarks, self._prev_landmark,
             self._keep, self.persist,
@@ -233,7 +235,7 @@ class LearntAgent(Agent):
         screen = screen_distances(q, nodes32, (nodes32 * nodes32).sum(1))
         out = np.empty((b, 5))
         _kernels.decide_learnt_batch(
-            s, prev, st, self._nodes, screen, self._prior, self._net,
+            s, prev, st, self._nodes_t, screen, self._prior, self._net,
             want, np.ascontiguousarray(r), self.guard, self.alpha, self.beta, self.wait,
             self._cos, self._sin, self.max_range, self._feat, self._p, out,
         )  # fmt: skip
@@ -256,6 +258,7 @@ class LearntAgent(Agent):
         # Every update moves the grown nodes (and may change their landmark): refresh.
         g = self._growth
         self._nodes = np.ascontiguousarray(nodes)
+        self._nodes_t = np.ascontiguousarray(self._nodes.T)
         self._templates = np.concatenate(
             [np.asarray(self.capabilities.node_template, dtype=np.int64), g._extra_template]
         )

@@ -11,6 +11,7 @@ from shapely.geometry import LineString, Polygon
 from copi._rng import Seed, as_generator
 from copi.errors import InvalidArgumentError, InvalidWorldError
 from copi.geometry._arrays import FloatArray
+from copi.geometry._polygons import signed_area, turned
 from copi.world._world import World
 
 __all__ = ["PolygonParams", "is_star_shaped", "polygon_world"]
@@ -96,8 +97,7 @@ def _crossings(pts: FloatArray) -> list[tuple[int, int]]:
 
 
 def _is_ccw(ring: FloatArray) -> bool:
-    x, y = ring[:, 0], ring[:, 1]
-    return float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y)) > 0
+    return signed_area(ring) > 0
 
 
 def _untangle(pts: FloatArray, rng: np.random.Generator) -> FloatArray:
@@ -324,10 +324,10 @@ def _draw(rng: np.random.Generator, p: PolygonParams, name: str | None) -> World
             size *= 0.6
     phi = rng.uniform(0, 2 * np.pi)
     rot = np.array([[np.cos(phi), -np.sin(phi)], [np.sin(phi), np.cos(phi)]])
-    shift = (ring @ rot.T).min(axis=0)
-    boundary = np.round(ring @ rot.T - shift, 6)
+    shift = turned(ring, rot).min(axis=0)
+    boundary = np.round(turned(ring, rot) - shift, 6)
     hole_rings = tuple(
-        np.round(np.asarray(h.exterior.coords)[:-1] @ rot.T - shift, 6) for h in holes
+        np.round(turned(np.asarray(h.exterior.coords)[:-1], rot) - shift, 6) for h in holes
     )
     label = name or f"polygon-{len(boundary)}gon-{len(holes)}holes"
     world = World(boundary, hole_rings, name=label)

@@ -12,6 +12,7 @@ from copi._rng import Seed, as_generator
 from copi.errors import InvalidArgumentError, InvalidWorldError
 from copi.geometry._arrays import FloatArray
 from copi.geometry._kernels import clearance as _clearance_kernel
+from copi.geometry._polygons import turned
 from copi.world._world import ObstacleSpec, World
 
 __all__ = ["WorldParams", "check_task", "place_obstacles", "random_world", "sample_start_goal"]
@@ -93,7 +94,7 @@ def random_world(
     pts *= np.array([np.sqrt(e), 1.0 / np.sqrt(e)])
     phi = rng.uniform(0, 2 * np.pi)
     rot = np.array([[np.cos(phi), -np.sin(phi)], [np.sin(phi), np.cos(phi)]])
-    pts = pts @ rot.T
+    pts = turned(pts, rot)
     pts -= pts.min(axis=0)
     return World(np.round(pts, 6), name=name or f"random-{n}gon")
 

@@ -12,8 +12,9 @@ Two things are learnt from the probes, both task-independent:
   how it changed since the last step, both *turned so that the direction is ray 0*.
   Turning the reading is the symmetry group's rotation acting on the context: one model
   serves every direction (and every mirror image, which the training data includes), so
-  a probe in one direction teaches all of them. It is a logistic regression
-  (scikit-learn) over fixed features of the turned reading; online it is evaluated by a
+  a probe in one direction teaches all of them. It is a one-hidden-layer network (16
+  ReLU units, :mod:`copi.learning._mlp`) over fixed features of the turned reading,
+  learnt the same on every processor; online it is evaluated by a
   compiled kernel (numpy's per-call overhead alone would exceed the decision budget).
 * **per-template priors**: each probe's state mapped to its landmark's template, and
   its direction turned by the landmark's symmetry g into the template's frame, counted
@@ -34,6 +35,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
+from copi.learning._mlp import fit_mlp
 from copi.learning._policies import compass
 from copi.world import RandomWalk, RangeSensor, Simulator, random_world, sample_world
 
@@ -303,31 +305,20 @@ over the same features 0.78, 8 units 0.92, 16 units 0.93, gradient-boosted trees
 
 
 def _fit(x: NDArray[np.float64], y: NDArray[np.bool_], seed: int) -> NDArray[np.float64]:
-    """A one-hidden-layer network (scikit-learn's MLPClassifier, seeded) packed as in
-    :func:`safety_probabilities`; a constant label gives a constant network."""
+    """A one-hidden-layer network (:func:`copi.learning._mlp.fit_mlp`, seeded; the same
+    on every processor) packed as in :attr:`SafetyModel.net`; a constant label gives a
+    constant network."""
     f = x.shape[1]
     net = np.zeros((HIDDEN + 1, 1 + f))
     if y.all() or not y.any():
         p = (y.sum() + 1.0) / (len(y) + 2.0)
         net[HIDDEN, 0] = math.log(p / (1 - p))
         return net
-    import warnings
-
-    from sklearn.exceptions import ConvergenceWarning
-    from sklearn.neural_network import MLPClassifier
-
-    clf = MLPClassifier(
-        (HIDDEN,), alpha=1e-3, max_iter=60, early_stopping=True, random_state=seed
-    )
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", ConvergenceWarning)
-        clf.fit(x, y)
-    w1, w2 = clf.coefs_
-    b1, b2 = clf.intercepts_
+    w1, b1, w2, b2 = fit_mlp(x, y, HIDDEN, alpha=1e-3, max_iter=60, seed=seed)
     net[:HIDDEN, 0] = b1
     net[:HIDDEN, 1:] = w1.T
-    net[HIDDEN, 0] = b2[0]
-    net[HIDDEN, 1 : 1 + HIDDEN] = w2[:, 0]
+    net[HIDDEN, 0] = b2
+    net[HIDDEN, 1 : 1 + HIDDEN] = w2
     return net
 
 

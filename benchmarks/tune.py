@@ -49,6 +49,9 @@ GRID: dict[str, list[dict[str, float]]] = {
         {"margin": 0.9, "follow": 1.8},
     ],
     "replan": [{"inflate": v} for v in (0.3, 0.6, 1.0, 1.5)],
+    # the learnt preset itself: its guard, and the weight of the learnt safety (alpha)
+    "copi-learnt": [{"guard": 1.05, "alpha": 2.0}, {"guard": 1.2, "alpha": 2.0},
+                    {"guard": 1.05, "alpha": 1.0}, {"guard": 1.05, "alpha": 4.0}],
     # the weight of the template safety priors in the learnt preset's ablations
     "copi-learnt-priors": [{"beta": v} for v in (0.25, 0.5, 1.0, 2.0)],
     "copi-learnt-motion": [{"beta": v} for v in (0.25, 0.5, 1.0, 2.0)],

@@ -248,7 +248,7 @@ def test_presets_set_a_mode_whole(tmp_path: Path, capsys: pytest.CaptureFixture[
     assert config["method"] == "copi-extended" and config["guard"] is None  # the method's
     from copi.experiments.methods import method_spec
 
-    assert method_spec("copi-extended").params["guard"] == 1.2
+    assert method_spec("copi-extended").params["guard"] == 1.05
     code, out, err = run(["pursuit", str(caps), "-o", str(tmp_path / "g.sqlite"), "--games",
                           "1", "--horizon", "20", "--preset", "extended"], capsys)  # fmt: skip
     assert code == 0 and "1 games" in out, err
@@ -273,7 +273,7 @@ def test_presets_set_a_mode_whole(tmp_path: Path, capsys: pytest.CaptureFixture[
          f"{caps} was learnt for preset extended (16 directions, no safety priors); preset "
          "learnt needs 16 directions, safety priors: learn it with copi learn --preset learnt"),
         (["evaluate", str(caps), "-o", str(tmp_path / "z.sqlite"), "--preset", "extended",
-          "--guard", "3"], "--guard 3 contradicts --preset extended (guard 1.2)"),
+          "--guard", "3"], "--guard 3 contradicts --preset extended (guard 1.05)"),
         (["pursuit", str(caps), "-o", str(tmp_path / "z.sqlite"), "--preset", "learnt"],
          f"{caps} was learnt for preset extended"),
         (["pursuit", str(caps), "-o", str(tmp_path / "z.sqlite"), "--evader", "learnt"],
@@ -282,7 +282,7 @@ def test_presets_set_a_mode_whole(tmp_path: Path, capsys: pytest.CaptureFixture[
         (["pursuit", str(caps), "-o", str(tmp_path / "z.sqlite"), "--evader", "learnt",
           "--preset", "extended"], "--evader learnt plays the learnt preset's agent"),
         (["pursuit", str(caps), "-o", str(tmp_path / "z.sqlite"), "--preset", "extended",
-          "--guard", "2"], "--guard 2 contradicts --preset extended (guard 1.2)"),
+          "--guard", "2"], "--guard 2 contradicts --preset extended (guard 1.05)"),
     ]:  # fmt: skip
         code, _, err = run(args, capsys)
         assert code == 2 and message in " ".join(err.split()), err

@@ -53,7 +53,7 @@ class Replan(Agent):
     sensing = "oracle"
 
     def __init__(
-        self, *, inflate: float = 0.6, every: int = 5, lookahead: float = 3.0, quad_segs: int = 2
+        self, *, inflate: float = 1.0, every: int = 5, lookahead: float = 3.0, quad_segs: int = 2
     ) -> None:
         if not (math.isfinite(inflate) and inflate >= 0):
             raise InvalidArgumentError(f"inflate must be a finite number >= 0; got {inflate!r}")

@@ -50,7 +50,7 @@ class CompassGuard(Steered):
 
     name = "compass-guard"
 
-    def __init__(self, *, guard: float = 1.05, directions: int = 16) -> None:
+    def __init__(self, *, guard: float = 1.2, directions: int = 16) -> None:
         if not (math.isfinite(guard) and guard > 0):
             raise InvalidArgumentError(f"guard must be a finite number > 0; got {guard!r}")
         if int(directions) != directions or directions < 1:

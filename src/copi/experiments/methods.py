@@ -494,7 +494,7 @@ def _register_builtins() -> None:
         summary="the paper's chain: learnt contexts, landmarks, symmetry and 4 A* policies "
         "per template; no hand-written avoidance")
     reg("copi-extended", CopiAgent, capabilities="extended", default=True,
-        params={"guard": 1.2},
+        params={"guard": 1.05},
         summary="the chain with 16 policies per template; each candidate checked against the "
         "live reading by a hand-written guard, which escapes when none is safe")
     reg("copi-learnt", LearntAgent, capabilities="learnt", default=True,
@@ -503,14 +503,15 @@ def _register_builtins() -> None:
         "exploration, shared by every direction through the symmetry); compass-guard's "
         "hand-written guard kept as a filter")
     # The learnt preset's ablations: -priors and -persist differ from copi-learnt in one
-    # thing each, -motion from -priors in one (its contexts); compass-guard is copi-learnt
-    # with nothing learnt (alpha = beta = 0). Their weights: docs/tuning.md.
+    # thing each, -motion from -priors in its contexts and its prior weight;
+    # compass-guard is copi-learnt with nothing learnt (alpha = beta = 0), its guard
+    # tuned on its own. Every weight: docs/tuning.md.
     reg("copi-learnt-priors", LearntAgent, capabilities="learnt", ablation=True,
-        params={"beta": 0.5},
+        params={"beta": 1.0},
         summary="copi-learnt plus the per-template safety priors (contexts of the reading "
         "alone, each move read through the template's symmetry) in each move's score")
     reg("copi-learnt-motion", LearntAgent, capabilities="learnt-motion", ablation=True,
-        params={"beta": 0.25},
+        params={"beta": 0.5},
         summary="copi-learnt-priors with contexts that see motion: context map, landmarks, "
         "templates and their priors over [reading, its change]")
     reg("copi-learnt-persist", LearntAgent, capabilities="learnt", ablation=True,

@@ -36,8 +36,9 @@ class LearntAgent(Agent):
     and by what the probes taught — the safety network over the reading turned to that
     direction, and the template's prior through the symmetry — and the best one that a
     hand-written guard allows is taken (see :func:`copi.online._kernels.decide_learnt`).
-    With ``alpha = beta = 0`` and no waiting this is ``compass-guard``: the ablation of
-    everything learnt.
+    With ``alpha = beta = 0`` and no waiting this is ``compass-guard`` at the same guard:
+    the ablation of everything learnt (the benchmark's compass-guard has its guard tuned
+    on its own, docs/tuning.md).
 
     Parameters
     ----------
@@ -70,7 +71,7 @@ class LearntAgent(Agent):
         *,
         name: str = "copi-learnt",
         guard: float = 1.05,
-        alpha: float = 2.0,
+        alpha: float = 1.0,
         beta: float = 0.0,
         wait: bool = False,
         continual: bool = False,

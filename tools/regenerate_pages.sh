@@ -1,0 +1,67 @@
+#!/usr/bin/env bash
+# Every generated results page of docs/, rerun from nothing (about 90 min on 2 cores):
+#
+#     bash tools/regenerate_pages.sh [results-dir]
+#
+# Each step is the command its page names in its header, run on fresh stores (the
+# results directory must not exist: nothing earlier is resumed); each page's header
+# records how long its command took. Then the quoted blocks of the README and the
+# analysis pages are rewritten (python tools/update_docs.py). `make bench` writes
+# docs/speed-run.md apart (timings want a quiet machine).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+R=${1:-results}
+if [ -e "$R" ]; then
+    echo "regenerate_pages: $R exists; give a new directory (nothing is resumed)" >&2
+    exit 2
+fi
+BIN=.venv/bin
+export PYTHONPATH=src
+took() { local s=$(( $(date +%s) - $1 )); echo "$((s / 60)) min $((s % 60)) s"; }
+
+t=$(date +%s)
+$BIN/python benchmarks/tune.py --episodes 100 --workers 2
+
+t=$(date +%s)
+$BIN/copi reproduce -o "$R/"
+$BIN/python tools/report_page.py "$R/report.md" docs/reproduce.md \
+    --title "The paper's experiments, as \`copi reproduce\` reports them" \
+    --command "\`copi reproduce -o results/ (seed 0, $(took "$t") on 2 cores)\`, then \`python tools/report_page.py\`" \
+    --about "The report \`copi reproduce\` writes; [the experiments, read](analysis/experiments.md) explains it."
+
+$BIN/python benchmarks/ceilings.py --bench "$R/ceilings" --episodes 200 --oracle-episodes 100
+# on the ceilings' store: the bounds page with the RL rows (its rl.md is overwritten next)
+$BIN/python benchmarks/rl_experiments.py --bench "$R/ceilings" --episodes 200 --games 200
+$BIN/python benchmarks/rl_experiments.py --bench "$R/rl-bench" --episodes 200 --games 200
+
+t=$(date +%s)
+$BIN/copi benchmark -o "$R/bench-ablations" --episodes 500 --workers 2 --methods ablations
+$BIN/python tools/benchmark_page.py "$R/bench-ablations" docs/benchmark-ablations.md \
+    --what "the learnt preset's ablations, 500 episodes" \
+    --command "\`copi benchmark -o results/bench-ablations --episodes 500 --workers 2 --methods ablations\` (seed 0; $(took "$t") on 2 cores)"
+
+M=copi-faithful@sensor,copi-extended@sensor,copi-learnt@sensor,straight@sensor,compass-guard@sensor,vfh@sensor,dwa@sensor,tangent-bug@sensor
+M=$M,copi-faithful@sensor:mapping,copi-extended@sensor:mapping,copi-learnt@sensor:mapping,straight@sensor:mapping
+M=$M,compass-guard@sensor:mapping,vfh@sensor:mapping,dwa@sensor:mapping,tangent-bug@sensor:mapping
+t=$(date +%s)
+$BIN/copi benchmark -o "$R/bench-mapping" --episodes 200 --methods "$M"
+$BIN/python tools/benchmark_page.py "$R/bench-mapping" docs/benchmark-mapping.md \
+    --what "200 episodes at level sensor, heading for the goal and with a map built on the fly" \
+    --command "\`copi benchmark -o results/bench-mapping --episodes 200 --methods $M\` (seed 0; $(took "$t") on 2 cores)"
+
+$BIN/python benchmarks/landmarks.py --seeds 10 --workers 2 --out docs/landmarks.md
+$BIN/python benchmarks/landmarks_effect.py --episodes 200 --seeds 0,1,2,3,4 \
+    --out docs/landmarks-effect.md
+
+t=$(date +%s)
+$BIN/copi learn -o "$R/capabilities-learnt.npz"
+L="--family maps --worlds 20 --tasks 50 --seed 3 --methods copi-learnt,copi-learnt-continual,copi-learnt@sensor:mapping,compass-guard"
+# shellcheck disable=SC2086
+$BIN/copi lifelong "$R/capabilities-learnt.npz" -o "$R/lifelong-maps/run.sqlite" $L
+$BIN/python tools/report_page.py "$R/lifelong-maps/run.md" docs/lifelong-maps.md \
+    --title "Experiment 3 in the maps family: continual contexts in unfamiliar worlds" \
+    --command "\`copi lifelong results/capabilities-learnt.npz -o results/lifelong-maps/run.sqlite $L ($(took "$t") on 2 cores)\`, then \`python tools/report_page.py\`"
+
+$BIN/python benchmarks/families.py --n 200 --seed 0 --pictures docs --into docs/families.md
+$BIN/python tools/update_docs.py
+echo "regenerate_pages: every page rewritten from $R"

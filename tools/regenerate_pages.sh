@@ -26,7 +26,7 @@ t=$(date +%s)
 $BIN/copi reproduce -o "$R/"
 $BIN/python tools/report_page.py "$R/report.md" docs/reproduce.md \
     --title "The paper's experiments, as \`copi reproduce\` reports them" \
-    --command "\`copi reproduce -o results/ (seed 0, $(took "$t") on 2 cores)\`, then \`python tools/report_page.py\`" \
+    --command "copi reproduce -o results/ (seed 0, $(took "$t") on 2 cores)" \
     --about "The report \`copi reproduce\` writes; [the experiments, read](analysis/experiments.md) explains it."
 
 $BIN/python benchmarks/ceilings.py --bench "$R/ceilings" --episodes 200 --oracle-episodes 100
@@ -60,7 +60,7 @@ L="--family maps --worlds 20 --tasks 50 --seed 3 --methods copi-learnt,copi-lear
 $BIN/copi lifelong "$R/capabilities-learnt.npz" -o "$R/lifelong-maps/run.sqlite" $L
 $BIN/python tools/report_page.py "$R/lifelong-maps/run.md" docs/lifelong-maps.md \
     --title "Experiment 3 in the maps family: continual contexts in unfamiliar worlds" \
-    --command "\`copi lifelong results/capabilities-learnt.npz -o results/lifelong-maps/run.sqlite $L ($(took "$t") on 2 cores)\`, then \`python tools/report_page.py\`"
+    --command "copi lifelong results/capabilities-learnt.npz -o results/lifelong-maps/run.sqlite $L ($(took "$t") on 2 cores)"
 
 $BIN/python benchmarks/families.py --n 200 --seed 0 --pictures docs --into docs/families.md
 $BIN/python tools/update_docs.py

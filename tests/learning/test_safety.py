@@ -154,7 +154,7 @@ def test_scoring_only_the_promising_directions_chooses_as_scoring_all(learnt, da
         out, p = np.empty(5), np.empty(17)
         _kernels.decide_learnt(
             s, prev, static, agent._nodes_t, agent._prior, net, aim[0], aim[1], 5.0, 1.05,
-            2.0, agent.beta, False, agent._cos, agent._sin, 10.0, np.empty(8 * 32), p, out,
+            2.0, agent.beta, False, agent._cos, agent._sin, 10.0, agent._compass, np.empty(8 * 32), p, out,
             agent._landmarks, prev_landmark, keep, persist, lazy,
         )  # fmt: skip
         outs.append((out.copy(), p.copy()))
@@ -181,7 +181,7 @@ def test_a_batch_decides_as_one_agent_at_a_time(learnt) -> None:
         out, p = np.empty(5), np.empty(17)
         _kernels.decide_learnt(
             s[i], prev[i], static[i], agent._nodes_t, agent._prior, agent._net, want[i, 0],
-            want[i, 1], reach[i], 1.05, 2.0, 0.5, False, agent._cos, agent._sin, 10.0,
+            want[i, 1], reach[i], 1.05, 2.0, 0.5, False, agent._cos, agent._sin, 10.0, agent._compass,
             np.empty(256), p, out, agent._landmarks, -1, -1, 0.0,
         )  # fmt: skip
         assert np.array_equal(actions[i], out[:2]) and nodes[i] == out[2]
@@ -207,7 +207,7 @@ def test_a_policy_lasts_while_the_reading_stays_within_its_landmark(learnt) -> N
         out, p = np.empty(5), np.empty(17)
         _kernels.decide_learnt(
             s, s, np.full(32, np.inf), agent._nodes_t, agent._prior, agent._net, aim[0], aim[1],
-            5.0, 1.05, 2.0, 0.0, False, agent._cos, agent._sin, 10.0, np.empty(256), p, out,
+            5.0, 1.05, 2.0, 0.0, False, agent._cos, agent._sin, 10.0, agent._compass, np.empty(256), p, out,
             agent._landmarks, prev_landmark, keep, persist,
         )  # fmt: skip
         return int(out[4])

@@ -321,9 +321,9 @@ class ContextController:
         s = np.ascontiguousarray(s)
         # Screen the nearest-node search with one float32 matrix product (BLAS); the
         # kernel then measures the few close nodes exactly.
-        screen = screen_distances(s, self._nodes32, self._norms32)
+        screen, cut = screen_distances(s, self._nodes32, self._norms32)
         _kernels.decide_batch(
-            s, np.ascontiguousarray(st), self._nodes_t, screen, self._cand, self._ok, want, r,
+            s, np.ascontiguousarray(st), self._nodes_t, screen, cut, self._cand, self._ok, want, r,
             self.guard, self._cos, self._sin, self.max_range, out,
         )  # fmt: skip
         if (out[:, 2] < 0).any():
@@ -390,14 +390,18 @@ class ContextController:
 
 def screen_distances(
     s: NDArray[np.float64], nodes32: NDArray[np.float32], norms32: NDArray[np.float32]
-) -> NDArray[np.float32]:
+) -> tuple[NDArray[np.float32], NDArray[np.float64]]:
     """Approximate squared distances of readings ``s`` (b, n) to the nodes, by one
-    float32 matrix product (BLAS): the screen of the batched nearest-node searches.
-    Non-finite readings read as 0 here (the kernels refuse them)."""
+    float32 matrix product (BLAS): the screen of the batched nearest-node searches; and
+    per row the cut below which a node is measured exactly, a wide margin above the
+    row's screened minimum (far above float32's error, so every processor's BLAS puts
+    the nearest node below it). Non-finite readings read as 0 here (the kernels refuse
+    them)."""
     s32 = np.nan_to_num(s, nan=0.0, posinf=0.0, neginf=0.0).astype(np.float32)
     screen = norms32[None, :] - 2.0 * (s32 @ nodes32.T)
     screen += (s32 * s32).sum(1)[:, None]
-    return np.ascontiguousarray(screen)
+    m = screen.min(axis=1).astype(np.float64)
+    return np.ascontiguousarray(screen), m + 1e-3 * np.abs(m) + 1e-2
 
 
 def _floats(x: Any, name: str) -> NDArray[np.float64]:

@@ -315,15 +315,11 @@ def _choose(  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True, inline="always")
-def _screened_nearest(x, row, nodes_t):  # type: ignore[no-untyped-def]
+def _screened_nearest(x, row, cut, nodes_t):  # type: ignore[no-untyped-def]
     """:func:`_nearest` with the search screened by ``row`` (approximate squared
-    distances): every node within a wide margin of the screened minimum is measured
-    with :func:`_exact`, so the choice is the one :func:`_nearest` makes."""
-    m = np.inf
-    for i in range(row.shape[0]):
-        if row[i] < m:
-            m = row[i]
-    cut = m + 1e-3 * abs(m) + 1e-2
+    distances): every node within ``cut`` (a wide margin above the screened minimum,
+    :func:`copi.online._controller.screen_distances`) is measured with :func:`_exact`,
+    so the choice is the one :func:`_nearest` makes."""
     node = -1
     bd = np.inf
     for i in range(row.shape[0]):
@@ -336,17 +332,17 @@ def _screened_nearest(x, row, nodes_t):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True, inline="always")
-def _screened_nearest_context(s, prev, row, nodes_t):  # type: ignore[no-untyped-def]
+def _screened_nearest_context(s, prev, row, cut, nodes_t):  # type: ignore[no-untyped-def]
     """:func:`_screened_nearest` of reading ``s``'s context (see
     :func:`_nearest_context`); ``row`` screens the contexts' distances."""
     if nodes_t.shape[0] == s.shape[0]:
-        return _screened_nearest(s, row, nodes_t)
-    return _screened_nearest(_context(s, prev, nodes_t.shape[0]), row, nodes_t)
+        return _screened_nearest(s, row, cut, nodes_t)
+    return _screened_nearest(_context(s, prev, nodes_t.shape[0]), row, cut, nodes_t)
 
 
 @njit(cache=True)
 def decide_batch(  # type: ignore[no-untyped-def]
-    s, static, nodes_t, screen, cand, ok, want, reach, guard, cos, sin, max_range, out
+    s, static, nodes_t, screen, cut, cand, ok, want, reach, guard, cos, sin, max_range, out
 ):
     """:func:`decide` for each row, out of shape (b, 5), with the nearest-node search
     screened by ``screen`` (b, n): approximate squared distances (a float32 matrix
@@ -361,17 +357,25 @@ def decide_batch(  # type: ignore[no-untyped-def]
         if not finite:
             out[b, 2] = -1.0
             continue
-        node, bd = _screened_nearest(x, screen[b], nodes_t)
+        node, bd = _screened_nearest(x, screen[b], cut[b], nodes_t)
         _choose(
             x, static[b], node, bd, cand, ok, want[b, 0], want[b, 1], reach[b], guard,
             cos, sin, max_range, out[b],
         )  # fmt: skip
 
 
+def compass_table(n_dir: int) -> np.ndarray:
+    """(cos, sin) of 2 pi d / n_dir for d < n_dir, by the formula (and the libm) the
+    kernels used to evaluate per decision: a table built once instead of 2 n_dir
+    trigonometric calls a decision."""
+    a = [2.0 * math.pi * d / n_dir for d in range(n_dir)]
+    return np.array([[math.cos(x), math.sin(x)] for x in a])
+
+
 @njit(cache=True)
 def decide_learnt(  # type: ignore[no-untyped-def]
     s, prev, static, nodes_t, node_prior, net, wx, wy, reach, guard, alpha, beta, wait,
-    cos, sin, max_range, feat, p, out, node_landmark, prev_landmark, keep, persist,
+    cos, sin, max_range, compass, feat, p, out, node_landmark, prev_landmark, keep, persist,
     lazy=True,
 ):
     """One decision of the ``learnt`` preset: every compass direction (and, with
@@ -404,7 +408,7 @@ def decide_learnt(  # type: ignore[no-untyped-def]
     k = keep if node < node_landmark.shape[0] and node_landmark[node] == prev_landmark else -1
     _learnt_choose(
         s, prev, static, node, d2, node_prior, net, wx, wy, reach, guard, alpha, beta, wait,
-        cos, sin, max_range, feat, p, out, lazy, k, persist,
+        cos, sin, max_range, compass, feat, p, out, lazy, k, persist,
     )  # fmt: skip
 
 
@@ -424,8 +428,8 @@ def _learnt_inputs(s, prev, static, out):  # type: ignore[no-untyped-def]
 
 @njit(cache=True)
 def decide_learnt_batch(  # type: ignore[no-untyped-def]
-    s, prev, static, nodes_t, screen, node_prior, net, want, reach, guard, alpha, beta, wait,
-    cos, sin, max_range, feat, p, out,
+    s, prev, static, nodes_t, screen, cut, node_prior, net, want, reach, guard, alpha, beta,
+    wait, cos, sin, max_range, compass, feat, p, out,
 ):
     """:func:`decide_learnt` for each row (lazy), out of shape (b, 5), with the
     nearest-node search screened as :func:`decide_batch` screens it."""
@@ -433,21 +437,22 @@ def decide_learnt_batch(  # type: ignore[no-untyped-def]
         x = s[b]
         if not _learnt_inputs(x, prev[b], static[b], out[b]):
             continue
-        node, bd = _screened_nearest_context(x, prev[b], screen[b], nodes_t)
+        node, bd = _screened_nearest_context(x, prev[b], screen[b], cut[b], nodes_t)
         _learnt_choose(
             x, prev[b], static[b], node, bd, node_prior, net, want[b, 0], want[b, 1],
-            reach[b], guard, alpha, beta, wait, cos, sin, max_range, feat, p, out[b], True,
-            -1, 0.0,
+            reach[b], guard, alpha, beta, wait, cos, sin, max_range, compass, feat, p, out[b],
+            True, -1, 0.0,
         )  # fmt: skip
 
 
 @njit(cache=True)
 def _learnt_choose(  # type: ignore[no-untyped-def]
     s, prev, static, node, d2, node_prior, net, wx, wy, reach, guard, alpha, beta, wait,
-    cos, sin, max_range, feat, p, out, lazy, keep, persist,
+    cos, sin, max_range, compass, feat, p, out, lazy, keep, persist,
 ):
     """The choice of :func:`decide_learnt` once the reading is recognised (node, d2),
-    direction ``keep`` (-1: none) scoring ``persist`` more."""
+    direction ``keep`` (-1: none) scoring ``persist`` more; ``compass`` (n_dir, 2) holds
+    each direction's (cos, sin) of 2 pi d / n_dir (:func:`compass_table`)."""
     n_dir = node_prior.shape[1]
     out[0] = 0.0
     out[1] = 0.0
@@ -489,8 +494,7 @@ def _learnt_choose(  # type: ignore[no-untyped-def]
     along = np.empty(n_dir)
     bound = np.empty(n_dir)
     for d in range(n_dir):
-        a0 = 2.0 * math.pi * d / n_dir
-        along[d] = math.cos(a0) * ux + math.sin(a0) * uy
+        along[d] = compass[d, 0] * ux + compass[d, 1] * uy
         bound[d] = along[d] + persist if d == keep else along[d]
     left = np.ones(n_dir, dtype=np.bool_)
     while True:
@@ -506,9 +510,8 @@ def _learnt_choose(  # type: ignore[no-untyped-def]
         if not all_p and best >= 0 and top < best_score:
             break  # no direction left can beat the best (nor is the fallback needed)
         left[d] = False
-        a0 = 2.0 * math.pi * d / n_dir
-        ax = math.cos(a0)
-        ay = math.sin(a0)
+        ax = compass[d, 0]
+        ay = compass[d, 1]
         step = _step_length(along[d] * reach, reach)
         if hit - step >= wall + _MARGIN and (guard <= 0.0 or moving - step >= guard + _MARGIN):
             # every hit is farther than the step: _room's distances, each at least a hit's
@@ -551,9 +554,8 @@ def _learnt_choose(  # type: ignore[no-untyped-def]
         best = fallback
     if best < 0:
         return
-    a0 = 2.0 * math.pi * best / n_dir
-    ax = math.cos(a0)
-    ay = math.sin(a0)
+    ax = compass[best, 0]
+    ay = compass[best, 1]
     step = _step_length((ax * ux + ay * uy) * reach, reach)
     out[0] = ax * step
     out[1] = ay * step

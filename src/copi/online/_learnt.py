@@ -103,6 +103,7 @@ class LearntAgent(Agent):
         self._nodes = np.ascontiguousarray(capabilities.nodes, dtype=np.float64)
         self._nodes_t = np.ascontiguousarray(self._nodes.T)  # the kernels' layout (dim, n)
         self._prior = node_priors(capabilities, model)
+        self._compass = _kernels.compass_table(self._prior.shape[1])
         n = capabilities.n_rays
         a = 2 * np.pi * np.arange(n) / n
         self._cos, self._sin = np.cos(a), np.sin(a)
@@ -162,7 +163,7 @@ class LearntAgent(Agent):
         _kernels.decide_learnt(
             s, prev, static, self._nodes_t, self._prior, self._net, desired[0], desired[1],
             reach, self.guard, self.alpha, self.beta, self.wait, self._cos, self._sin,
-            self.max_range, self._feat, self._p, out, self._landmarks, self._prev_landmark,
+            self.max_range, self._compass, self._feat, self._p, out, self._landmarks, self._prev_landmark,
             self._keep, self.persist,
         )  # fmt: skip
         if out[2] < 0:
@@ -233,12 +234,12 @@ class LearntAgent(Agent):
             )
         nodes32 = self._nodes.astype(np.float32)  # the nodes may have grown
         q = np.ascontiguousarray(self.capabilities.contexts(s, prev))
-        screen = screen_distances(q, nodes32, (nodes32 * nodes32).sum(1))
+        screen, cut = screen_distances(q, nodes32, (nodes32 * nodes32).sum(1))
         out = np.empty((b, 5))
         _kernels.decide_learnt_batch(
-            s, prev, st, self._nodes_t, screen, self._prior, self._net,
+            s, prev, st, self._nodes_t, screen, cut, self._prior, self._net,
             want, np.ascontiguousarray(r), self.guard, self.alpha, self.beta, self.wait,
-            self._cos, self._sin, self.max_range, self._feat, self._p, out,
+            self._cos, self._sin, self.max_range, self._compass, self._feat, self._p, out,
         )  # fmt: skip
         if (out[:, 2] == -1).any():
             raise InvalidArgumentError("readings must be finite and >= 0 (and previous finite)")

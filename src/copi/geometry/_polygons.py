@@ -54,7 +54,7 @@ def turned(points: FloatArray, rot: FloatArray) -> FloatArray:
     """``points @ rot.T`` for 2-d points, each coordinate one product and one sum (a
     matrix product is BLAS's, whose rounding depends on the processor: the same seed
     must draw the same world on every machine)."""
-    return points[:, :1] * rot[:, 0] + points[:, 1:] * rot[:, 1]
+    return np.asarray(points[:, :1] * rot[:, 0] + points[:, 1:] * rot[:, 1], dtype=np.float64)
 
 
 def orient(ring: FloatArray, *, ccw: bool = True) -> FloatArray:

@@ -163,8 +163,8 @@ class LearntAgent(Agent):
         _kernels.decide_learnt(
             s, prev, static, self._nodes_t, self._prior, self._net, desired[0], desired[1],
             reach, self.guard, self.alpha, self.beta, self.wait, self._cos, self._sin,
-            self.max_range, self._compass, self._feat, self._p, out, self._landmarks, self._prev_landmark,
-            self._keep, self.persist,
+            self.max_range, self._compass, self._feat, self._p, out, self._landmarks,
+            self._prev_landmark, self._keep, self.persist,
         )  # fmt: skip
         if out[2] < 0:
             what = "not finite and >= 0" if out[2] == -1 else "static reading not >= 0"

@@ -20,6 +20,7 @@ import numpy as np
 
 from benchmarks._timing import Timing, median_time, note, report
 from copi.experiments import NavigationConfig, evaluate
+from copi.experiments.methods import make_agent
 from copi.learning import LearnParams, explore, learn
 from copi.online import ContextController, LearntAgent
 
@@ -83,7 +84,7 @@ def main() -> bool:
         return decide
 
     learnt = learn(LearnParams(directions=16, safety=True))
-    agent = LearntAgent(learnt, guard=1.05, alpha=2.0, beta=0.0, wait=False)  # the preset
+    agent = make_agent("copi-learnt", learnt)  # the registered preset
     learnt_decision = one_decision(agent)
     rows.append(
         Timing(
@@ -94,7 +95,7 @@ def main() -> bool:
     # contexts that see motion (copi-learnt-motion, an ablation: no goal of its own)
     moving = learn(LearnParams(directions=16, safety=True, motion=True))
     motion_decision = one_decision(
-        LearntAgent(moving, guard=1.05, alpha=2.0, beta=0.25, wait=False)
+        make_agent("copi-learnt-motion", moving)
     )
     rows.append(
         Timing(

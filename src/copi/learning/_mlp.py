@@ -58,20 +58,25 @@ def _forward(x, w1, b1, w2, b2, z):  # type: ignore[no-untyped-def]
     return o
 
 
+@njit(cache=True, inline="always")
+def _layers(params, f):  # type: ignore[no-untyped-def]
+    """Views of the flat vector ``params`` = [w1 (f x h), b1 (h), w2 (h), b2] for f
+    inputs: (w1, b1, w2); b2 is params[-1]."""
+    h = (params.shape[0] - 1) // (f + 2)
+    nw1 = f * h
+    return params[:nw1].reshape((f, h)), params[nw1 : nw1 + h], params[nw1 + h : nw1 + 2 * h]
+
+
 @njit(cache=True)
 def _epoch(x, y, order, params, grads, m1, m2, step, alpha):  # type: ignore[no-untyped-def]
     """One pass of minibatch Adam over the rows ``order`` of (x, y); returns the step
     count. ``params`` is the flat vector [w1 (f x h), b1 (h), w2 (h), b2], ``grads``,
     ``m1`` and ``m2`` (Adam's moments) alike."""
     f = x.shape[1]
-    h = (params.shape[0] - 1) // (f + 2)
+    w1, b1, w2 = _layers(params, f)
+    g1, gb1, gw2 = _layers(grads, f)
+    h = b1.shape[0]
     nw1 = f * h
-    w1 = params[:nw1].reshape((f, h))
-    b1 = params[nw1 : nw1 + h]
-    w2 = params[nw1 + h : nw1 + 2 * h]
-    g1 = grads[:nw1].reshape((f, h))
-    gb1 = grads[nw1 : nw1 + h]
-    gw2 = grads[nw1 + h : nw1 + 2 * h]
     z = np.empty(h)
     da = np.empty(h)
     n = order.shape[0]
@@ -116,13 +121,8 @@ def _epoch(x, y, order, params, grads, m1, m2, step, alpha):  # type: ignore[no-
 @njit(cache=True)
 def _log_loss(x, y, params):  # type: ignore[no-untyped-def]
     """Mean log loss of the network ``params`` on (x, y)."""
-    f = x.shape[1]
-    h = (params.shape[0] - 1) // (f + 2)
-    nw1 = f * h
-    w1 = params[:nw1].reshape((f, h))
-    b1 = params[nw1 : nw1 + h]
-    w2 = params[nw1 + h : nw1 + 2 * h]
-    z = np.empty(h)
+    w1, b1, w2 = _layers(params, x.shape[1])
+    z = np.empty(b1.shape[0])
     total = 0.0
     for r in range(x.shape[0]):
         o = _forward(x[r], w1, b1, w2, params[-1], z)
@@ -173,6 +173,5 @@ def fit_mlp(
                 best_loss, best = loss, params.copy()
             if stale >= PATIENCE:
                 break
-    nw1 = f * hidden
-    return (best[:nw1].reshape(f, hidden).copy(), best[nw1 : nw1 + hidden].copy(),
-            best[nw1 + hidden : nw1 + 2 * hidden].copy(), float(best[-1]))  # fmt: skip
+    w1, b1, w2 = _layers(best, f)
+    return w1.copy(), b1.copy(), w2.copy(), float(best[-1])

@@ -106,13 +106,29 @@ def safety_features(
 def ring_features(s, prev, feat):  # type: ignore[no-untyped-def]
     """The feature blocks of reading ``s`` after ``prev`` into ``feat`` (8 n_rays), each
     block written twice, so that turning the reading is a slice (see
-    :func:`safety_of`)."""
+    :func:`safety_of`). The values are :func:`_feature`'s, computed a ray at a time (the
+    change once, not once a block; the approach block's exponential only for a ray
+    that came nearer: otherwise the block is exactly 0)."""
     n = s.shape[0]
-    for b in range(N_BLOCKS):
-        for i in range(n):
-            v = _feature(s, prev, i, b)
-            feat[2 * b * n + i] = v
-            feat[2 * b * n + n + i] = v
+    for i in range(n):
+        r = s[i]
+        d = r - prev[i]
+        if d > DELTA:
+            d = DELTA
+        elif d < -DELTA:
+            d = -DELTA
+        v0 = min(r, CAP) / CAP
+        v1 = d / DELTA
+        v2 = math.exp(-r)
+        v3 = 0.0 if d >= 0.0 else min(d, 0.0) / DELTA * math.exp(-0.5 * r)
+        feat[i] = v0
+        feat[n + i] = v0
+        feat[2 * n + i] = v1
+        feat[3 * n + i] = v1
+        feat[4 * n + i] = v2
+        feat[5 * n + i] = v2
+        feat[6 * n + i] = v3
+        feat[7 * n + i] = v3
 
 
 def kernel_net(net: NDArray[np.float64]) -> NDArray[np.float64]:

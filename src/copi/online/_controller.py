@@ -140,8 +140,8 @@ class ContextController:
         self._out = np.empty(5)
         self._nodes = np.ascontiguousarray(caps.nodes, dtype=np.float64)
         self._nodes_t = np.ascontiguousarray(self._nodes.T)  # the kernels' layout (dim, n)
-        self._nodes32 = self._nodes.astype(np.float32)
-        self._norms32 = (self._nodes32 * self._nodes32).sum(1)
+        self._screen = screen_nodes(self._nodes)  # decide_batch's screen
+        self._gram: NDArray[np.float32] | None = None  # decide_batch's product, reused
         self._landmark = caps.landmarks.node_landmark
         self._template = caps.node_template
         self._element = caps.node_element
@@ -321,10 +321,10 @@ class ContextController:
         s = np.ascontiguousarray(s)
         # Screen the nearest-node search with one float32 matrix product (BLAS); the
         # kernel then measures the few close nodes exactly.
-        screen, cut = screen_distances(s, self._nodes32, self._norms32)
+        self._gram, sq = screen_products(s, self._screen, self._gram)
         _kernels.decide_batch(
-            s, np.ascontiguousarray(st), self._nodes_t, screen, cut, self._cand, self._ok, want, r,
-            self.guard, self._cos, self._sin, self.max_range, out,
+            s, np.ascontiguousarray(st), self._nodes_t, self._gram, sq, self._cand, self._ok,
+            want, r, self.guard, self._cos, self._sin, self.max_range, out,
         )  # fmt: skip
         if (out[:, 2] < 0).any():
             raise InvalidArgumentError("readings must be finite")
@@ -388,20 +388,32 @@ class ContextController:
         return self.n_unfamiliar / self.n_decisions if self.n_decisions else 0.0
 
 
-def screen_distances(
-    s: NDArray[np.float64], nodes32: NDArray[np.float32], norms32: NDArray[np.float32]
+def screen_nodes(nodes: NDArray[np.float64]) -> NDArray[np.float32]:
+    """The nodes as the batched screen takes them: float32 rows [node, -|node|^2 / 2]
+    (see :func:`screen_products`)."""
+    n32 = np.asarray(nodes, dtype=np.float32)
+    return np.ascontiguousarray(np.column_stack([n32, -0.5 * (n32 * n32).sum(1)]))
+
+
+def screen_products(
+    s: NDArray[np.float64], nodes: NDArray[np.float32], buf: NDArray[np.float32] | None = None
 ) -> tuple[NDArray[np.float32], NDArray[np.float64]]:
-    """Approximate squared distances of readings ``s`` (b, n) to the nodes, by one
-    float32 matrix product (BLAS): the screen of the batched nearest-node searches; and
-    per row the cut below which a node is measured exactly, a wide margin above the
-    row's screened minimum (far above float32's error, so every processor's BLAS puts
-    the nearest node below it). Non-finite readings read as 0 here (the kernels refuse
-    them)."""
-    s32 = np.nan_to_num(s, nan=0.0, posinf=0.0, neginf=0.0).astype(np.float32)
-    screen = norms32[None, :] - 2.0 * (s32 @ nodes32.T)
-    screen += (s32 * s32).sum(1)[:, None]
-    m = screen.min(axis=1).astype(np.float64)
-    return np.ascontiguousarray(screen), m + 1e-3 * np.abs(m) + 1e-2
+    """The screen of the batched nearest-node searches: for readings ``s`` (b, dim) and
+    ``nodes`` (:func:`screen_nodes`), the float32 products s . node - |node|^2 / 2 of
+    every reading and node, by one matrix product (BLAS) into ``buf`` when it has the
+    shape (b, nodes), and each reading's squared norm; |s|^2 - 2 product approximates
+    the squared distance, and the kernels screen with it row by row
+    (:func:`copi.online._kernels._screened_nearest`). Non-finite readings read as 0
+    here (the kernels refuse them)."""
+    b, dim = s.shape
+    s32 = np.empty((b, dim + 1), dtype=np.float32)
+    s32[:, :dim] = np.nan_to_num(s, nan=0.0, posinf=0.0, neginf=0.0)
+    s32[:, dim] = 1.0
+    shape = (b, len(nodes))
+    gram = buf if buf is not None and buf.shape == shape else np.empty(shape, np.float32)
+    np.matmul(s32, nodes.T, out=gram)
+    sq = s32[:, :dim].astype(np.float64)
+    return gram, (sq * sq).sum(1)
 
 
 def _floats(x: Any, name: str) -> NDArray[np.float64]:

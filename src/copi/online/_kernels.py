@@ -109,36 +109,71 @@ def decide(  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True, inline="always")
-def _room(s, static, cos, sin, max_range, ax, ay, step):  # type: ignore[no-untyped-def]
-    """For a step of length ``step`` along (ax, ay): the least distance from the moved
-    agent to a hit the static map does not explain (a moving obstacle), the least
-    distance from its path to such a hit, and from its path to any hit."""
-    end = np.inf
-    sweep = np.inf
-    sweep_all = np.inf
-    ex = step * ax
-    ey = step * ay
-    for i in range(s.shape[0]):
+def _hits(s, static, cos, sin, max_range, hits):  # type: ignore[no-untyped-def]
+    """The hit points of reading ``s`` in the agent's frame, into ``hits`` (2, n): those
+    the static map does not explain (moving obstacles) in columns [0, km), the walls in
+    [k0, n). Returns (km, k0). Computed once a decision, so that :func:`_room` measures
+    each candidate step against a list, not the reading."""
+    n = s.shape[0]
+    km = 0
+    k0 = n
+    for i in range(n):
         if s[i] >= max_range:
             continue
         px = s[i] * cos[i]
         py = s[i] * sin[i]
+        if s[i] >= static[i] - 0.05:  # explained by the static map: a wall
+            k0 -= 1
+            hits[0, k0] = px
+            hits[1, k0] = py
+        else:
+            hits[0, km] = px
+            hits[1, km] = py
+            km += 1
+    return km, k0
+
+
+@njit(cache=True, inline="always")
+def _room(hits, km, k0, ax, ay, step):  # type: ignore[no-untyped-def]
+    """For a step of length ``step`` along (ax, ay): the least distance from the moved
+    agent to a hit the static map does not explain (a moving obstacle), the least
+    distance from its path to such a hit, and from its path to any hit (``hits``,
+    ``km``, ``k0``: :func:`_hits`).
+
+    The minima are taken over squared distances and rooted once: the square root is
+    correctly rounded and monotone, so this is exactly the least of the rooted distances
+    (64 square roots a candidate fewer)."""
+    end = np.inf
+    sweep = np.inf
+    ex = step * ax
+    ey = step * ay
+    for i in range(km):
+        px = hits[0, i]
+        py = hits[1, i]
         t = px * ax + py * ay
         if t < 0.0:
             t = 0.0
         elif t > step:
             t = step
-        dd = math.sqrt((px - t * ax) ** 2 + (py - t * ay) ** 2)
-        if dd < sweep_all:
-            sweep_all = dd
-        if s[i] >= static[i] - 0.05:
-            continue  # explained by the static map: a wall
+        dd = (px - t * ax) ** 2 + (py - t * ay) ** 2
         if dd < sweep:
             sweep = dd
-        de = math.sqrt((px - ex) ** 2 + (py - ey) ** 2)
+        de = (px - ex) ** 2 + (py - ey) ** 2
         if de < end:
             end = de
-    return end, sweep, sweep_all
+    sweep_all = sweep
+    for i in range(k0, hits.shape[1]):
+        px = hits[0, i]
+        py = hits[1, i]
+        t = px * ax + py * ay
+        if t < 0.0:
+            t = 0.0
+        elif t > step:
+            t = step
+        dd = (px - t * ax) ** 2 + (py - t * ay) ** 2
+        if dd < sweep_all:
+            sweep_all = dd
+    return math.sqrt(end), math.sqrt(sweep), math.sqrt(sweep_all)
 
 
 _MARGIN = 1e-9
@@ -161,14 +196,15 @@ def _step_length(along, reach):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True, inline="always")
-def _escape(s, static, cos, sin, max_range, n, clear, roomy, out):  # type: ignore[no-untyped-def]
+def _escape(hits, km, k0, n, clear, roomy, out):  # type: ignore[no-untyped-def]
     """The escape: a full step along whichever of ``n`` compass directions ends farthest
     (beyond ``clear``) from moving hits without its path coming within ``roomy`` of any
-    hit; writes it to ``out`` (choice -2) and returns True, or False if none does."""
+    hit (``hits``, ``km``, ``k0``: :func:`_hits`); writes it to ``out`` (choice -2) and
+    returns True, or False if none does."""
     esc = -1
     for d in range(n):
         a0 = 2.0 * math.pi * d / n
-        end, _, sweep_all = _room(s, static, cos, sin, max_range, math.cos(a0), math.sin(a0), 1.0)
+        end, _, sweep_all = _room(hits, km, k0, math.cos(a0), math.sin(a0), 1.0)
         if sweep_all >= roomy and end > clear:
             clear = end
             esc = d
@@ -182,7 +218,7 @@ def _escape(s, static, cos, sin, max_range, n, clear, roomy, out):  # type: igno
 
 
 @njit(cache=True, inline="always")
-def _refused(s, static, cos, sin, max_range, ax, ay, score, reach, guard, wall):  # type: ignore[no-untyped-def]
+def _refused(hits, km, k0, ax, ay, score, reach, guard, wall):  # type: ignore[no-untyped-def]
     """Whether the guard refuses the step along (ax, ay) (alignment ``score`` with the
     desired direction): after it a moving hit nearer than ``guard``, or its path passing
     one nearer than half of that, or running within ``wall`` of any hit (a wall
@@ -190,7 +226,7 @@ def _refused(s, static, cos, sin, max_range, ax, ay, score, reach, guard, wall):
     be stopped there: without this, a quantised direction pressed into a wall corner for
     good where the route hugs it. Returns (refused, end, sweep_all)."""
     step = _step_length(score * reach, reach)
-    end, sweep, sweep_all = _room(s, static, cos, sin, max_range, ax, ay, step)
+    end, sweep, sweep_all = _room(hits, km, k0, ax, ay, step)
     if guard <= 0.0:
         end = np.inf
         sweep = np.inf
@@ -208,10 +244,12 @@ def guard_verdicts(s, static, dirs, wx, wy, reach, guard, cos, sin, max_range, o
         if s[i] < now:
             now = s[i]
     wall = min(_WALL, now - 1e-6)
+    hits = np.empty((2, s.shape[0]))
+    km, k0 = _hits(s, static, cos, sin, max_range, hits)
     for k in range(dirs.shape[0]):
         score = (dirs[k, 0] * wx + dirs[k, 1] * wy) / norm if norm > 0.0 else 0.0
-        refused, _, _ = _refused(s, static, cos, sin, max_range, dirs[k, 0], dirs[k, 1],
-                                 score, reach, guard, wall)  # fmt: skip
+        refused, _, _ = _refused(hits, km, k0, dirs[k, 0], dirs[k, 1], score, reach, guard,
+                                 wall)  # fmt: skip
         out[k] = not refused
 
 
@@ -258,6 +296,9 @@ def _choose(  # type: ignore[no-untyped-def]
     # checked against the hits (a guard, or the compass fallback).
     wall = _WALL
     roomy = 0.35
+    hits = np.empty((2, s.shape[0]))
+    km = 0
+    k0 = s.shape[0]
     if guard > 0.0 or compass:
         now = np.inf
         for i in range(s.shape[0]):
@@ -265,6 +306,7 @@ def _choose(  # type: ignore[no-untyped-def]
                 now = s[i]
         wall = min(_WALL, now - 1e-6)
         roomy = min(0.35, now - 1e-6)
+        km, k0 = _hits(s, static, cos, sin, max_range, hits)
     best = -1
     best_score = -np.inf
     fallback = -1
@@ -281,8 +323,8 @@ def _choose(  # type: ignore[no-untyped-def]
             continue
         score = ax * ux + ay * uy
         if guard > 0.0 or compass:
-            refused, end, sweep_all = _refused(s, static, cos, sin, max_range, ax, ay,
-                                               score, reach, guard, wall)  # fmt: skip
+            refused, end, sweep_all = _refused(hits, km, k0, ax, ay, score, reach, guard,
+                                               wall)  # fmt: skip
             if refused:
                 # a fallback may come near a moving obstacle, never run into a hit
                 if sweep_all >= wall and end > fallback_clear:
@@ -295,7 +337,7 @@ def _choose(  # type: ignore[no-untyped-def]
     if best < 0 and guard > 0.0 and fallback_clear < guard:
         # Nothing the template offers is safe: escape along whichever compass direction
         # leaves the most room (the live reading overrides the template here).
-        if _escape(s, static, cos, sin, max_range, cand.shape[1], fallback_clear, roomy, out):
+        if _escape(hits, km, k0, cand.shape[1], fallback_clear, roomy, out):
             return
     if best < 0:
         best = fallback
@@ -315,15 +357,28 @@ def _choose(  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True, inline="always")
-def _screened_nearest(x, row, cut, nodes_t):  # type: ignore[no-untyped-def]
-    """:func:`_nearest` with the search screened by ``row`` (approximate squared
-    distances): every node within ``cut`` (a wide margin above the screened minimum,
-    :func:`copi.online._controller.screen_distances`) is measured with :func:`_exact`,
-    so the choice is the one :func:`_nearest` makes."""
+def _screened_nearest(x, gram, sq, nodes_t):  # type: ignore[no-untyped-def]
+    """:func:`_nearest` with the search screened by one row of float32 products
+    (:func:`copi.online._controller.screen_products`): ``gram[i]`` is x . node_i -
+    |node_i|^2 / 2 and ``sq`` is |x|^2, so ``sq - 2 gram[i]`` approximates the squared
+    distance to node i. Every node within a wide margin above the least of them (1e-3
+    of it, 1e-5 of |x|^2 and 1e-2: float32's error grows with the magnitudes multiplied,
+    and the margin stays far above it, so that every processor's BLAS puts the nearest
+    node below it) is measured with :func:`_exact`: the choice is the one
+    :func:`_nearest` makes. With the norms folded into the product, the screen costs a
+    maximum and a comparison a node (no (b, n) temporaries in numpy, whose cost
+    exceeded the product's)."""
+    top = -np.inf
+    for i in range(gram.shape[0]):
+        if gram[i] > top:
+            top = gram[i]
+    m = sq - 2.0 * top
+    cut = m + 1e-3 * abs(m) + 1e-5 * sq + 1e-2
+    low = 0.5 * (sq - cut)  # sq - 2 gram[i] <= cut
     node = -1
     bd = np.inf
-    for i in range(row.shape[0]):
-        if row[i] <= cut:
+    for i in range(gram.shape[0]):
+        if gram[i] >= low:
             e = _exact(x, nodes_t, i)
             if e < bd:
                 bd = e
@@ -332,22 +387,21 @@ def _screened_nearest(x, row, cut, nodes_t):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True, inline="always")
-def _screened_nearest_context(s, prev, row, cut, nodes_t):  # type: ignore[no-untyped-def]
+def _screened_nearest_context(s, prev, gram, sq, nodes_t):  # type: ignore[no-untyped-def]
     """:func:`_screened_nearest` of reading ``s``'s context (see
-    :func:`_nearest_context`); ``row`` screens the contexts' distances."""
+    :func:`_nearest_context`); ``gram`` and ``sq`` screen the contexts' distances."""
     if nodes_t.shape[0] == s.shape[0]:
-        return _screened_nearest(s, row, cut, nodes_t)
-    return _screened_nearest(_context(s, prev, nodes_t.shape[0]), row, cut, nodes_t)
+        return _screened_nearest(s, gram, sq, nodes_t)
+    return _screened_nearest(_context(s, prev, nodes_t.shape[0]), gram, sq, nodes_t)
 
 
 @njit(cache=True)
 def decide_batch(  # type: ignore[no-untyped-def]
-    s, static, nodes_t, screen, cut, cand, ok, want, reach, guard, cos, sin, max_range, out
+    s, static, nodes_t, gram, sq, cand, ok, want, reach, guard, cos, sin, max_range, out
 ):
     """:func:`decide` for each row, out of shape (b, 5), with the nearest-node search
-    screened by ``screen`` (b, n): approximate squared distances (a float32 matrix
-    product). Every node within a wide margin of a row's screened minimum is measured
-    with :func:`_exact`, so the choice is the one :func:`_nearest` makes."""
+    screened by ``gram`` (b, n) and ``sq`` (b,) (see :func:`_screened_nearest`): the
+    choice is the one :func:`_nearest` makes."""
     for b in range(s.shape[0]):
         x = s[b]
         finite = True
@@ -357,7 +411,7 @@ def decide_batch(  # type: ignore[no-untyped-def]
         if not finite:
             out[b, 2] = -1.0
             continue
-        node, bd = _screened_nearest(x, screen[b], cut[b], nodes_t)
+        node, bd = _screened_nearest(x, gram[b], sq[b], nodes_t)
         _choose(
             x, static[b], node, bd, cand, ok, want[b, 0], want[b, 1], reach[b], guard,
             cos, sin, max_range, out[b],
@@ -409,6 +463,7 @@ def decide_learnt(  # type: ignore[no-untyped-def]
     _learnt_choose(
         s, prev, static, node, d2, node_prior, net, wx, wy, reach, guard, alpha, beta, wait,
         cos, sin, max_range, compass, feat, p, out, lazy, k, persist,
+        _work(s.shape[0], node_prior.shape[1]),
     )  # fmt: skip
 
 
@@ -428,31 +483,40 @@ def _learnt_inputs(s, prev, static, out):  # type: ignore[no-untyped-def]
 
 @njit(cache=True)
 def decide_learnt_batch(  # type: ignore[no-untyped-def]
-    s, prev, static, nodes_t, screen, cut, node_prior, net, want, reach, guard, alpha, beta,
+    s, prev, static, nodes_t, gram, sq, node_prior, net, want, reach, guard, alpha, beta,
     wait, cos, sin, max_range, compass, feat, p, out,
 ):
     """:func:`decide_learnt` for each row (lazy), out of shape (b, 5), with the
     nearest-node search screened as :func:`decide_batch` screens it."""
+    work = _work(s.shape[1], node_prior.shape[1])
     for b in range(s.shape[0]):
         x = s[b]
         if not _learnt_inputs(x, prev[b], static[b], out[b]):
             continue
-        node, bd = _screened_nearest_context(x, prev[b], screen[b], cut[b], nodes_t)
+        node, bd = _screened_nearest_context(x, prev[b], gram[b], sq[b], nodes_t)
         _learnt_choose(
             x, prev[b], static[b], node, bd, node_prior, net, want[b, 0], want[b, 1],
             reach[b], guard, alpha, beta, wait, cos, sin, max_range, compass, feat, p, out[b],
-            True, -1, 0.0,
+            True, -1, 0.0, work,
         )  # fmt: skip
+
+
+@njit(cache=True, inline="always")
+def _work(n, n_dir):  # type: ignore[no-untyped-def]
+    """Scratch of :func:`_learnt_choose` for ``n`` rays and ``n_dir`` directions (one
+    allocation, made once a batch)."""
+    return np.empty((4, max(n, n_dir)))
 
 
 @njit(cache=True)
 def _learnt_choose(  # type: ignore[no-untyped-def]
     s, prev, static, node, d2, node_prior, net, wx, wy, reach, guard, alpha, beta, wait,
-    cos, sin, max_range, compass, feat, p, out, lazy, keep, persist,
+    cos, sin, max_range, compass, feat, p, out, lazy, keep, persist, work,
 ):
     """The choice of :func:`decide_learnt` once the reading is recognised (node, d2),
     direction ``keep`` (-1: none) scoring ``persist`` more; ``compass`` (n_dir, 2) holds
-    each direction's (cos, sin) of 2 pi d / n_dir (:func:`compass_table`)."""
+    each direction's (cos, sin) of 2 pi d / n_dir (:func:`compass_table`); ``work`` is
+    scratch (:func:`_work`)."""
     n_dir = node_prior.shape[1]
     out[0] = 0.0
     out[1] = 0.0
@@ -483,6 +547,8 @@ def _learnt_choose(  # type: ignore[no-untyped-def]
                 moving = min(moving, s[i])
     wall = min(_WALL, now - 1e-6)
     roomy = min(0.35, now - 1e-6)
+    hits = work[:2, :n]
+    km, k0 = _hits(s, static, cos, sin, max_range, hits)
     best = -1
     best_score = -np.inf
     free_p = 0.0
@@ -491,25 +557,24 @@ def _learnt_choose(  # type: ignore[no-untyped-def]
     # does not run into a hit is a fallback, the one ending farthest from moving hits.
     fallback = -1
     fallback_clear = -np.inf
-    along = np.empty(n_dir)
-    bound = np.empty(n_dir)
+    along = work[2]
+    bound = work[3]  # -inf once seen (every bound is finite)
     for d in range(n_dir):
         along[d] = compass[d, 0] * ux + compass[d, 1] * uy
         bound[d] = along[d] + persist if d == keep else along[d]
-    left = np.ones(n_dir, dtype=np.bool_)
     while True:
         # the direction with the highest bound not yet seen (lower index first)
         d = -1
         top = -np.inf
         for e in range(n_dir):
-            if left[e] and bound[e] > top:
+            if bound[e] > top:
                 top = bound[e]
                 d = e
         if d < 0:
             break
         if not all_p and best >= 0 and top < best_score:
             break  # no direction left can beat the best (nor is the fallback needed)
-        left[d] = False
+        bound[d] = -np.inf
         ax = compass[d, 0]
         ay = compass[d, 1]
         step = _step_length(along[d] * reach, reach)
@@ -519,7 +584,7 @@ def _learnt_choose(  # type: ignore[no-untyped-def]
             # when nothing is admitted), so they are not measured
             end = sweep = sweep_all = np.inf
         else:
-            end, sweep, sweep_all = _room(s, static, cos, sin, max_range, ax, ay, step)
+            end, sweep, sweep_all = _room(hits, km, k0, ax, ay, step)
         if guard <= 0.0:
             end = np.inf
             sweep = np.inf
@@ -548,7 +613,7 @@ def _learnt_choose(  # type: ignore[no-untyped-def]
             out[4] = -4.0
             return
     if best < 0 and guard > 0.0 and fallback_clear < guard:
-        if _escape(s, static, cos, sin, max_range, n_dir, fallback_clear, roomy, out):
+        if _escape(hits, km, k0, n_dir, fallback_clear, roomy, out):
             return
     if best < 0:
         best = fallback

@@ -14,7 +14,7 @@ from copi.learning import Capabilities
 from copi.learning._safety import SafetyModel, kernel_net, template_directions
 from copi.online import _kernels
 from copi.online._agent import Steering
-from copi.online._controller import ContextController, screen_distances
+from copi.online._controller import ContextController, screen_nodes, screen_products
 
 __all__ = ["LearntAgent", "node_priors"]
 
@@ -102,6 +102,8 @@ class LearntAgent(Agent):
         self._net = kernel_net(model.net)  # the kernels' layout
         self._nodes = np.ascontiguousarray(capabilities.nodes, dtype=np.float64)
         self._nodes_t = np.ascontiguousarray(self._nodes.T)  # the kernels' layout (dim, n)
+        self._screen: NDArray[np.float32] | None = None  # decide_batch's screen, when used
+        self._gram: NDArray[np.float32] | None = None
         self._prior = node_priors(capabilities, model)
         self._compass = _kernels.compass_table(self._prior.shape[1])
         n = capabilities.n_rays
@@ -150,6 +152,7 @@ class LearntAgent(Agent):
             self._growth = None
             self._nodes = np.ascontiguousarray(self.capabilities.nodes, dtype=np.float64)
             self._nodes_t = np.ascontiguousarray(self._nodes.T)
+            self._screen = None
             self._prior = node_priors(self.capabilities, self.model)
             self._templates = np.asarray(self.capabilities.node_template, dtype=np.int64)
 
@@ -201,7 +204,8 @@ class LearntAgent(Agent):
         ``desired[i]`` (no global strategy here: it is given), within ``reach[i]`` (inf
         by default), with ``static[i]`` as the static reading (none by default), and
         without persistence (a batch has no previous decision). The
-        nearest-node search is screened by one float32 matrix product. Returns
+        nearest-node search is screened by one float32 matrix product (see
+        :func:`copi.online._controller.screen_products`). Returns
         (actions (b, 2), nodes (b,))."""
         n = self.capabilities.n_rays
         s = np.ascontiguousarray(np.asarray(ranges, dtype=np.float64))
@@ -232,12 +236,13 @@ class LearntAgent(Agent):
             raise InvalidArgumentError(
                 f"static readings must have shape {s.shape}; got {st.shape}"
             )
-        nodes32 = self._nodes.astype(np.float32)  # the nodes may have grown
+        if self._screen is None:  # first use, or the nodes have grown or moved
+            self._screen = screen_nodes(self._nodes)
         q = np.ascontiguousarray(self.capabilities.contexts(s, prev))
-        screen, cut = screen_distances(q, nodes32, (nodes32 * nodes32).sum(1))
+        self._gram, sq = screen_products(q, self._screen, self._gram)
         out = np.empty((b, 5))
         _kernels.decide_learnt_batch(
-            s, prev, st, self._nodes_t, screen, cut, self._prior, self._net,
+            s, prev, st, self._nodes_t, self._gram, sq, self._prior, self._net,
             want, np.ascontiguousarray(r), self.guard, self.alpha, self.beta, self.wait,
             self._cos, self._sin, self.max_range, self._compass, self._feat, self._p, out,
         )  # fmt: skip
@@ -261,6 +266,7 @@ class LearntAgent(Agent):
         g = self._growth
         self._nodes = np.ascontiguousarray(nodes)
         self._nodes_t = np.ascontiguousarray(self._nodes.T)
+        self._screen = None
         self._templates = np.concatenate(
             [np.asarray(self.capabilities.node_template, dtype=np.int64), g._extra_template]
         )

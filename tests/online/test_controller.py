@@ -212,3 +212,59 @@ def test_continual_growth_rate_is_checked() -> None:
     caps = learn(LearnParams(worlds=2, steps=40, seed=0))
     with pytest.raises(InvalidArgumentError, match="grow_every must be a positive int; got 0"):
         ContextController(caps, continual=True, grow_every=0)
+
+
+@settings(max_examples=80, deadline=None)
+@given(
+    seed=st.integers(0, 2**31),
+    angle=st.floats(0, 2 * np.pi),
+    step=st.floats(0.05, 1.0),
+    walls=st.floats(0.0, 1.0),
+)
+def test_room_distances_match_a_plain_rendition(seed, angle, step, walls) -> None:
+    """The guard's distances (hit points listed once, minima over squared distances rooted
+    once) equal the distances measured hit by hit with numpy."""
+    from copi.online import _kernels
+
+    n = 32
+    rng = np.random.default_rng(seed)
+    s = np.where(rng.random(n) < 0.2, 10.0, rng.uniform(0.2, 9.9, n))
+    static = np.where(rng.random(n) < walls, s, np.inf)  # these hits are walls
+    a = 2 * np.pi * np.arange(n) / n
+    cos, sin = np.cos(a), np.sin(a)
+    hits = np.empty((2, n))
+    km, k0 = _kernels._hits(s, static, cos, sin, 10.0, hits)
+    ax, ay = math.cos(angle), math.sin(angle)
+    end, sweep, sweep_all = _kernels._room(hits, km, k0, ax, ay, step)
+    seen = s < 10.0
+    moving = seen & (s < static - 0.05)
+    pts = np.column_stack([s * cos, s * sin])
+    t = np.clip(pts @ [ax, ay], 0.0, step)
+    path = np.hypot(pts[:, 0] - t * ax, pts[:, 1] - t * ay)
+    after = np.hypot(pts[:, 0] - step * ax, pts[:, 1] - step * ay)
+    want = [after[moving].min(initial=np.inf), path[moving].min(initial=np.inf),
+            path[seen].min(initial=np.inf)]  # fmt: skip
+    np.testing.assert_allclose([end, sweep, sweep_all], want, rtol=1e-12, atol=1e-12)
+    assert km == moving.sum() and n - k0 == (seen & ~moving).sum()
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**31), scale=st.sampled_from([0.01, 1.0, 10.0]))
+def test_the_batched_screen_finds_the_exact_nearest_node(seed, scale) -> None:
+    """The float32 screen (norms folded into one product) keeps the exact nearest node
+    among its candidates, for nodes near one another and far from the origin (where
+    float32's error is largest)."""
+    from copi.online import _kernels
+    from copi.online._controller import screen_nodes, screen_products
+
+    rng = np.random.default_rng(seed)
+    centre = rng.uniform(5.0, 10.0, 32)
+    nodes = centre + scale * rng.normal(size=(300, 32))
+    x = centre + scale * rng.normal(size=(40, 32))
+    gram, sq = screen_products(x, screen_nodes(nodes))
+    nodes_t = np.ascontiguousarray(nodes.T)
+    for b in range(len(x)):
+        node, d2 = _kernels._screened_nearest(x[b], gram[b], sq[b], nodes_t)
+        full = ((nodes - x[b]) ** 2).sum(1)
+        assert node == int(np.argmin(full))
+        assert d2 == pytest.approx(full.min(), rel=1e-12)

@@ -20,6 +20,7 @@ from copi.learning._safety import (
     SafetyModel,
     kernel_net,
     predict,
+    ring_features,
     safety_features,
     safety_probabilities,
     template_priors,
@@ -45,6 +46,26 @@ def _probs(s: np.ndarray, prev: np.ndarray, net: np.ndarray, n_dir: int = 16) ->
 
 
 readings = st.lists(st.floats(0.0, 10.0), min_size=32, max_size=32).map(np.array)
+
+
+# ranges that repeat (the sensor's reach, a flat wall) and readings that did not change
+runs = st.lists(st.sampled_from([0.5, 2.0, 10.0]) | st.floats(0.0, 10.0), min_size=32,
+                max_size=32).map(np.array)  # fmt: skip
+
+
+@settings(max_examples=60, deadline=None)
+@given(s=runs, prev=runs, same=st.booleans(), shift=st.integers(0, 31))
+def test_ring_features_equal_the_training_features_bitwise(s, prev, same, shift) -> None:
+    """What the kernels evaluate online (each block a ray at a time, exponentials
+    skipped where they are not needed) is, to the last bit, what the network was
+    trained on."""
+    prev = s.copy() if same else prev
+    feat = np.empty(8 * 32)
+    ring_features(s, prev, feat)
+    n = 32
+    turned = np.concatenate([feat[2 * b * n + shift : 2 * b * n + shift + n] for b in range(4)])
+    want = safety_features(s, prev, shift)
+    assert turned.tobytes() == want.tobytes()
 
 
 @settings(max_examples=30, deadline=None)

@@ -107,9 +107,12 @@ def ring_features(s, prev, feat):  # type: ignore[no-untyped-def]
     """The feature blocks of reading ``s`` after ``prev`` into ``feat`` (8 n_rays), each
     block written twice, so that turning the reading is a slice (see
     :func:`safety_of`). The values are :func:`_feature`'s, computed a ray at a time (the
-    change once, not once a block; the approach block's exponential only for a ray
-    that came nearer: otherwise the block is exactly 0)."""
+    change once, not once a block; the closeness block's exponential once for a run of
+    equal ranges; the approach block's only for a ray that came nearer: otherwise the
+    block is exactly 0)."""
     n = s.shape[0]
+    last = -1.0  # the last range whose exponential was taken (rays at the sensor's
+    v2 = 0.0  # reach often repeat one value)
     for i in range(n):
         r = s[i]
         d = r - prev[i]
@@ -119,7 +122,9 @@ def ring_features(s, prev, feat):  # type: ignore[no-untyped-def]
             d = -DELTA
         v0 = min(r, CAP) / CAP
         v1 = d / DELTA
-        v2 = math.exp(-r)
+        if r != last:
+            v2 = math.exp(-r)
+            last = r
         v3 = 0.0 if d >= 0.0 else min(d, 0.0) / DELTA * math.exp(-0.5 * r)
         feat[i] = v0
         feat[n + i] = v0

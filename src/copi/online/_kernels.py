@@ -533,8 +533,7 @@ def _learnt_choose(  # type: ignore[no-untyped-def]
     all_p = wait or not lazy
     if all_p:
         safety_probabilities(s, prev, net, n_dir, feat, p)
-    else:
-        ring_features(s, prev, feat)
+    rung = all_p  # the ring's features, computed when the network first needs them
     now = np.inf
     hit = np.inf  # the nearest hit, and the nearest the static map does not explain
     moving = np.inf
@@ -600,6 +599,9 @@ def _learnt_choose(  # type: ignore[no-untyped-def]
         if top < best_score:
             continue
         if not all_p:
+            if not rung:
+                ring_features(s, prev, feat)
+                rung = True
             p[d] = safety_of(net, 0, d * per, feat, n)
         score = top + alpha * math.log(max(p[d], 1e-9))
         if beta > 0.0:

@@ -49,8 +49,8 @@ readings = st.lists(st.floats(0.0, 10.0), min_size=32, max_size=32).map(np.array
 
 
 # ranges that repeat (the sensor's reach, a flat wall) and readings that did not change
-runs = st.lists(st.sampled_from([0.5, 2.0, 10.0]) | st.floats(0.0, 10.0), min_size=32,
-                max_size=32).map(np.array)  # fmt: skip
+runs = st.lists(st.sampled_from([0.5, 2.0, 10.0, 0.0, -0.0]) | st.floats(0.0, 10.0),
+                min_size=32, max_size=32).map(np.array)  # fmt: skip
 
 
 @settings(max_examples=60, deadline=None)

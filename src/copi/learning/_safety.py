@@ -111,7 +111,7 @@ def ring_features(s, prev, feat):  # type: ignore[no-untyped-def]
     equal ranges; the approach block's only for a ray that came nearer: otherwise the
     block is exactly 0)."""
     n = s.shape[0]
-    last = -1.0  # the last range whose exponential was taken (rays at the sensor's
+    last = np.nan  # the last range whose exponential was taken (rays at the sensor's
     v2 = 0.0  # reach often repeat one value)
     for i in range(n):
         r = s[i]
@@ -125,7 +125,9 @@ def ring_features(s, prev, feat):  # type: ignore[no-untyped-def]
         if r != last:
             v2 = math.exp(-r)
             last = r
-        v3 = 0.0 if d >= 0.0 else min(d, 0.0) / DELTA * math.exp(-0.5 * r)
+        v3 = min(d, 0.0) / DELTA  # +-0 unless the ray came nearer (the sign kept)
+        if d < 0.0:
+            v3 = v3 * math.exp(-0.5 * r)
         feat[i] = v0
         feat[n + i] = v0
         feat[2 * n + i] = v1

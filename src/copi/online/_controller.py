@@ -286,7 +286,8 @@ class ContextController:
         self, ranges: Any, desired: Any, reach: Any = None, static: Any = None
     ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
         """Velocities for many agents at once (same results as :meth:`decide` row by
-        row); returns (actions (b, 2), nodes (b,))."""
+        row); returns (actions (b, 2), nodes (b,)). Not to be called from several
+        threads on one controller at once (the screen's buffer is reused)."""
         self._check_chain()
         s = self._check(ranges)
         if s.ndim != 2:

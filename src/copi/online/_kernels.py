@@ -142,7 +142,7 @@ def _room(hits, km, k0, ax, ay, step):  # type: ignore[no-untyped-def]
 
     The minima are taken over squared distances and rooted once: the square root is
     correctly rounded and monotone, so this is exactly the least of the rooted distances
-    (64 square roots a candidate fewer)."""
+    (two square roots a hit and candidate fewer)."""
     end = np.inf
     sweep = np.inf
     ex = step * ax
@@ -362,9 +362,10 @@ def _screened_nearest(x, gram, sq, nodes_t):  # type: ignore[no-untyped-def]
     (:func:`copi.online._controller.screen_products`): ``gram[i]`` is x . node_i -
     |node_i|^2 / 2 and ``sq`` is |x|^2, so ``sq - 2 gram[i]`` approximates the squared
     distance to node i. Every node within a wide margin above the least of them (1e-3
-    of it, 1e-5 of |x|^2 and 1e-2: float32's error grows with the magnitudes multiplied,
-    and the margin stays far above it, so that every processor's BLAS puts the nearest
-    node below it) is measured with :func:`_exact`: the choice is the one
+    of it, 1e-4 of |x|^2 and 1e-2: float32's error grows with the magnitudes multiplied,
+    and a worst-case bound of it for a product of 33 terms is about 2.4e-5 |x|^2, so
+    that every processor's BLAS puts the nearest node below it) is measured with
+    :func:`_exact`: the choice is the one
     :func:`_nearest` makes. With the norms folded into the product, the screen costs a
     maximum and a comparison a node (no (b, n) temporaries in numpy, whose cost
     exceeded the product's)."""
@@ -373,7 +374,7 @@ def _screened_nearest(x, gram, sq, nodes_t):  # type: ignore[no-untyped-def]
         if gram[i] > top:
             top = gram[i]
     m = sq - 2.0 * top
-    cut = m + 1e-3 * abs(m) + 1e-5 * sq + 1e-2
+    cut = m + 1e-3 * abs(m) + 1e-4 * sq + 1e-2
     low = 0.5 * (sq - cut)  # sq - 2 gram[i] <= cut
     node = -1
     bd = np.inf

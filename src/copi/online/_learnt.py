@@ -203,7 +203,8 @@ class LearntAgent(Agent):
         for reading ``ranges[i]`` after ``previous[i]``, with the global direction
         ``desired[i]`` (no global strategy here: it is given), within ``reach[i]`` (inf
         by default), with ``static[i]`` as the static reading (none by default), and
-        without persistence (a batch has no previous decision). The
+        without persistence (a batch has no previous decision); not to be called from
+        several threads on one agent at once (the screen's buffer is reused). The
         nearest-node search is screened by one float32 matrix product (see
         :func:`copi.online._controller.screen_products`). Returns
         (actions (b, 2), nodes (b,))."""

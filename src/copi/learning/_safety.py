@@ -61,13 +61,20 @@ N_BLOCKS = 4
 
 
 @njit(cache=True, inline="always")
+def _change(r, p):  # type: ignore[no-untyped-def]
+    """A range's change since the last step, clipped to +-DELTA."""
+    d = r - p
+    if d > DELTA:
+        return DELTA
+    if d < -DELTA:
+        return -DELTA
+    return d
+
+
+@njit(cache=True, inline="always")
 def _feature(s, prev, i, block):  # type: ignore[no-untyped-def]
     r = s[i]
-    d = r - prev[i]
-    if d > DELTA:
-        d = DELTA
-    elif d < -DELTA:
-        d = -DELTA
+    d = _change(r, prev[i])
     if block == 0:
         return min(r, CAP) / CAP
     if block == 1:
@@ -115,11 +122,7 @@ def ring_features(s, prev, feat):  # type: ignore[no-untyped-def]
     v2 = 0.0  # reach often repeat one value)
     for i in range(n):
         r = s[i]
-        d = r - prev[i]
-        if d > DELTA:
-            d = DELTA
-        elif d < -DELTA:
-            d = -DELTA
+        d = _change(r, prev[i])
         v0 = min(r, CAP) / CAP
         v1 = d / DELTA
         if r != last:

@@ -134,6 +134,18 @@ def _hits(s, static, cos, sin, max_range, hits):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True, inline="always")
+def _path_d2(px, py, ax, ay, step):  # type: ignore[no-untyped-def]
+    """Squared distance from the point (px, py) to the path of a step of length ``step``
+    along the unit vector (ax, ay) from the origin."""
+    t = px * ax + py * ay
+    if t < 0.0:
+        t = 0.0
+    elif t > step:
+        t = step
+    return (px - t * ax) ** 2 + (py - t * ay) ** 2
+
+
+@njit(cache=True, inline="always")
 def _room(hits, km, k0, ax, ay, step):  # type: ignore[no-untyped-def]
     """For a step of length ``step`` along (ax, ay): the least distance from the moved
     agent to a hit the static map does not explain (a moving obstacle), the least
@@ -150,12 +162,7 @@ def _room(hits, km, k0, ax, ay, step):  # type: ignore[no-untyped-def]
     for i in range(km):
         px = hits[0, i]
         py = hits[1, i]
-        t = px * ax + py * ay
-        if t < 0.0:
-            t = 0.0
-        elif t > step:
-            t = step
-        dd = (px - t * ax) ** 2 + (py - t * ay) ** 2
+        dd = _path_d2(px, py, ax, ay, step)
         if dd < sweep:
             sweep = dd
         de = (px - ex) ** 2 + (py - ey) ** 2
@@ -165,12 +172,7 @@ def _room(hits, km, k0, ax, ay, step):  # type: ignore[no-untyped-def]
     for i in range(k0, hits.shape[1]):
         px = hits[0, i]
         py = hits[1, i]
-        t = px * ax + py * ay
-        if t < 0.0:
-            t = 0.0
-        elif t > step:
-            t = step
-        dd = (px - t * ax) ** 2 + (py - t * ay) ** 2
+        dd = _path_d2(px, py, ax, ay, step)
         if dd < sweep_all:
             sweep_all = dd
     return math.sqrt(end), math.sqrt(sweep), math.sqrt(sweep_all)

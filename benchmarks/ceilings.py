@@ -2,7 +2,7 @@
 model-predictive oracle beside every method, on the same episodes.
 
     python benchmarks/ceilings.py --bench results/ceilings --episodes 200 \\
-        --oracle-episodes 100 --out docs/ceilings.md
+        --oracle-episodes 200 --out docs/ceilings.md
 
 Runs ``copi benchmark`` twice into one directory (resumable): every default method and
 ``clairvoyant`` on ``--episodes`` episodes per family, then ``model-oracle`` (1-3 s an
@@ -47,7 +47,7 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--bench", default="results/ceilings")
     ap.add_argument("--episodes", type=int, default=200)
-    ap.add_argument("--oracle-episodes", type=int, default=100)
+    ap.add_argument("--oracle-episodes", type=int, default=200)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--out", default="docs/ceilings.md")
     a = ap.parse_args()

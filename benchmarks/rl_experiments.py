@@ -573,11 +573,17 @@ def write_bounds_page(bench: Path, a: argparse.Namespace, page: Path) -> Path:
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
     from benchmark_page import write_page
 
+    from copi.experiments.benchmark_report import read_benchmark
+
+    # the episodes the oracle ran (ceilings.py's --oracle-episodes), read from the store
+    groups, _, _ = read_benchmark(bench / "benchmark.sqlite")
+    n_oracle = max((len(rows) for arms in groups.values() for arm, rows in arms.items()
+                    if arm.method == "model-oracle"), default=0)  # fmt: skip
     command = (
         f"`python benchmarks/ceilings.py --bench {a.bench} --episodes {a.episodes} "
-        f"--oracle-episodes 100` and `python benchmarks/rl_experiments.py --bench {a.bench} "
-        f"--episodes {a.episodes} --games {a.games}` (seed 0; model-oracle on the first 100 "
-        "episodes)"
+        f"--oracle-episodes {n_oracle}` and `python benchmarks/rl_experiments.py --bench "
+        f"{a.bench} --episodes {a.episodes} --games {a.games}` (seed 0; model-oracle on the "
+        f"first {n_oracle} episodes)"
     )
     return write_page(bench, page, f"{a.episodes} episodes, with the bounds and the RL peers",
                       command)  # fmt: skip

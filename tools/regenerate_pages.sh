@@ -29,7 +29,7 @@ $BIN/python tools/report_page.py "$R/report.md" docs/reproduce.md \
     --command "copi reproduce -o results/ (seed 0, $(took "$t") on 2 cores)" \
     --about "The report \`copi reproduce\` writes; [the experiments, read](analysis/experiments.md) explains it."
 
-$BIN/python benchmarks/ceilings.py --bench "$R/ceilings" --episodes 200 --oracle-episodes 100
+$BIN/python benchmarks/ceilings.py --bench "$R/ceilings" --episodes 200 --oracle-episodes 200
 # on the ceilings' store: the bounds page with the RL rows (its rl.md is overwritten next)
 $BIN/python benchmarks/rl_experiments.py --bench "$R/ceilings" --episodes 200 --games 200
 $BIN/python benchmarks/rl_experiments.py --bench "$R/rl-bench" --episodes 200 --games 200

@@ -462,3 +462,82 @@ def escape_move(  # type: ignore[no-untyped-def]
             best_cost = cost
             best_hit = hits / n_s
     return best, best_cost, best_hit
+
+
+@njit(cache=True)
+def hindsight_values(  # type: ignore[no-untyped-def]
+    samples, radii, agent_r, margin, x0, y0, res, ok, terminal, goal, offsets, mid_ok, cap
+):
+    """The window's value averaged over the sampled futures, each solved as if known
+    (hindsight optimisation: Chong, Givan & Chang 2000; Yoon et al. 2008).
+
+    In each sample s a cell (i, j) is blocked at step t when some disc is within the sum of
+    radii plus ``margin`` of its centre; ``V_s[t, i, j]`` is the least number of steps from
+    (i, j) at step t through unblocked cells to the horizon, plus ``terminal`` there (0
+    once in a ``goal`` cell), infinite when every way is blocked. Returns V (horizon + 1,
+    n, n) whose step-1 layer is the mean over samples of min(V_s[1], ``cap``), a sample
+    with no way through counting ``cap``; other layers unused.
+
+    Against :func:`risk_values` (which averages the discs first and plans once against
+    the mean occupancy, so that at a few steps' distance every cell a disc may reach looks
+    risky), this plans once per future and averages the plans' costs: it assumes the agent
+    will see each future as it comes, which is optimistic (it will see it a step at a
+    time), where the mean-occupancy plan is pessimistic."""
+    n_s = samples.shape[0]
+    horizon = samples.shape[1] - 1
+    d = samples.shape[2]
+    n = ok.shape[0]
+    blocked = np.zeros((horizon + 1, n, n), dtype=np.bool_)
+    Vn = np.empty((n, n))
+    Vc = np.empty((n, n))
+    total = np.zeros((n, n))
+    for s in range(n_s):
+        blocked[:] = False
+        for t in range(1, horizon + 1):
+            for k in range(d):
+                reach = agent_r + radii[k] + margin
+                cx = samples[s, t, k, 0]
+                cy = samples[s, t, k, 1]
+                j0 = max(int(math.ceil((cx - reach - x0) / res)), 0)
+                j1 = min(int(math.floor((cx + reach - x0) / res)), n - 1)
+                i0 = max(int(math.ceil((cy - reach - y0) / res)), 0)
+                i1 = min(int(math.floor((cy + reach - y0) / res)), n - 1)
+                r2 = reach * reach
+                for i in range(i0, i1 + 1):
+                    py = y0 + i * res - cy
+                    for j in range(j0, j1 + 1):
+                        px = x0 + j * res - cx
+                        if px * px + py * py <= r2:
+                            blocked[t, i, j] = True
+        for i in range(n):
+            for j in range(n):
+                Vn[i, j] = terminal[i, j] if not blocked[horizon, i, j] else np.inf
+        for t in range(horizon - 1, 0, -1):
+            for i in range(n):
+                for j in range(n):
+                    if blocked[t, i, j] or not ok[i, j]:
+                        Vc[i, j] = np.inf
+                        continue
+                    if goal[i, j]:
+                        Vc[i, j] = 0.0
+                        continue
+                    best = np.inf
+                    for o in range(offsets.shape[0]):
+                        a = i + offsets[o, 0]
+                        b = j + offsets[o, 1]
+                        if a < 0 or b < 0 or a >= n or b >= n or not mid_ok[o, i, j]:
+                            continue
+                        v = Vn[a, b] + 1.0
+                        if v < best:
+                            best = v
+                    Vc[i, j] = best
+            Vn, Vc = Vc, Vn
+        for i in range(n):
+            for j in range(n):
+                total[i, j] += min(Vn[i, j], cap)
+    V = np.full((horizon + 1, n, n), np.inf)
+    for i in range(n):
+        for j in range(n):
+            if ok[i, j]:
+                V[1, i, j] = total[i, j] / n_s
+    return V

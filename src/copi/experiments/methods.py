@@ -548,13 +548,14 @@ def _register_builtins() -> None:
     reg("clairvoyant", Clairvoyant, sensing="future", default=True, bound=True,
         summary="a bound: space-time A* on the obstacles' recorded future (they ignore the "
         "agent), its plan replayed through the simulator: the share of episodes solvable")
-    # model-oracle costs 1-3 s an episode (4-8 ms a step): not in the default run; run it
+    # model-oracle costs 1-3 s an episode (20-40 ms a step): not in the default run; run it
     # on fewer episodes into the same directory, the report pairs it on those.
     reg("model-oracle", ModelOracle, sensing="oracle", default=False, bound=True,
         summary="a bound: model-predictive control on 32 sampled futures of the obstacles' "
-        "random walk (its true parameters), replanned every step; knows the present and the "
-        "motion model, not the future (hand-written, tuned on seed 1; 1-3 s an episode, so "
-        "run apart: --methods model-oracle --episodes 100)")
+        "random walk (its true parameters), each solved in hindsight and the costs averaged, "
+        "replanned every step; knows the present and the motion model, not the future "
+        "(hand-written, tuned on seed 1; 1-3 s an episode, so run apart: --methods "
+        "model-oracle)")
     margins = {"navground-hrvo": 0.6, "navground-hl": 0.3, "navground-orca": 0.3}
     for name, behavior in NAVGROUND_BEHAVIORS.items():
         reg(name, _navground(behavior), sensing="oracle", requires="peers",

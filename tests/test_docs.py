@@ -45,6 +45,21 @@ def test_generated_blocks_are_what_the_tool_writes(page: str) -> None:
     )
 
 
+def test_quoted_paragraphs_are_the_sections_bold_ones(tmp_path: Path) -> None:
+    """The README's family-by-family gaps are the ceilings page's own paragraphs: a
+    stale block is rewritten, every family is there, the page's other prose is not."""
+    tool = _tool()
+    page = tmp_path / "page.md"
+    page.write_text("<!-- quote-text ceilings.md#How much of the gap copi closes -->\n"
+                    "stale\n<!-- /quote-text -->\n")  # fmt: skip
+    text = tool.generated(page)
+    assert "stale" not in text and "The gap is the oracle's success" not in text
+    for family in ("star", "polygon", "indoor", "maps", "crowd"):
+        assert f"**{family}**: " in text, family
+    with pytest.raises(SystemExit, match="has no heading"):
+        tool.quoted_paragraphs("ceilings.md#No such section")
+
+
 def test_a_results_line_that_differs_from_its_source_fails(tmp_path: Path) -> None:
     tool = _tool()
     page = tmp_path / "page.md"

@@ -6,6 +6,9 @@
   methods (:func:`copi.experiments.methods.methods_markdown`);
 - between ``<!-- results ... -->`` and ``<!-- /results -->`` (README only): the headline
   rows, each quoted whole from the generated results page it names (``RESULTS`` below);
+- between ``<!-- quote-text PAGE#SECTION -->`` and ``<!-- /quote-text -->``: the
+  paragraphs under the heading ``SECTION`` of ``docs/PAGE`` that open with a bold name
+  (``**crowd**: ...``), quoted whole (the ceilings' family-by-family gaps);
 - between ``<!-- quote PAGE#SECTION -->`` and ``<!-- /quote -->`` (any page in ``PAGES``):
   the first table under the heading ``SECTION`` of the generated page ``docs/PAGE``
   (``PAGE#SECTION#N``: its N-th table, from 1), quoted whole; ``| rows: A, B`` after the
@@ -29,12 +32,10 @@ RESULTS: list[tuple[str, str, str]] = [
      "**What is possible.** Every episode of every family is solvable by a clairvoyant; in "
      "crowds no method comes near it, and copi's learnt part does not yet beat the "
      "hand-written guard"),
-    ("ceilings.md", "| indoor |", "Indoors, at level map, copi-learnt is the best method"),
     ("benchmark-bounds.md#crowd", "| compass-guard | map |",
      "**Where copi loses.** compass-guard — copi's hand-written guard with nothing learnt, "
      "its guard tuned on its own — has more successes than copi-learnt (the reference of "
      "Δ) in crowds at level map"),
-    ("benchmark-bounds.md#maps", "| compass-guard | map |", "and in the maps family"),
     ("rl.md", "| indoor | map |",
      "**Against deep RL.** PPO trained in the family it is tested on (2M steps), beside "
      "copi-learnt (learnt once, without any task); this PPO learnt little beyond following "
@@ -126,10 +127,35 @@ def quoted_table(spec: str) -> str:
     return "\n".join(table) + "\n"
 
 
+def quoted_paragraphs(spec: str) -> str:
+    """The paragraphs ``PAGE#SECTION`` names that open with a bold name (see the module)."""
+    page, _, section = spec.strip().partition("#")
+    path = ROOT / "docs" / page
+    if not path.is_file():
+        raise SystemExit(f"quote-text {spec!r}: no docs/{page}")
+    lines = path.read_text().splitlines()
+    start = next((i for i, x in enumerate(lines)
+                  if x.startswith("#") and x.lstrip("#").strip().startswith(section)), None)
+    if start is None:
+        raise SystemExit(f"quote-text {spec!r}: docs/{page} has no heading {section!r}")
+    end = next((i for i in range(start + 1, len(lines)) if lines[i].startswith("#")),
+               len(lines))  # fmt: skip
+    body = "\n".join(lines[start + 1 : end])
+    kept = [p.strip() for p in body.split("\n\n") if p.strip().startswith("**")]
+    if not kept:
+        raise SystemExit(f"quote-text {spec!r}: no paragraph opens with a bold name")
+    return "\n\n".join(kept) + "\n"
+
+
 def _quotes(text: str) -> str:
     pattern = re.compile(r"(<!-- quote ([^>]*?) -->\n).*?(<!-- /quote -->)", re.S)
-    return pattern.sub(
+    text = pattern.sub(
         lambda m: m.group(1) + "\n" + quoted_table(m.group(2)) + "\n" + m.group(3), text
+    )
+    pattern = re.compile(r"(<!-- quote-text ([^>]*?) -->\n).*?(<!-- /quote-text -->)", re.S)
+    return pattern.sub(
+        lambda m: m.group(1) + "\n" + quoted_paragraphs(m.group(2)) + "\n" + m.group(3),
+        text,
     )
 
 

@@ -255,6 +255,16 @@ def test_hindsight_values_equal_a_shortest_path_per_sampled_future(seed: int) ->
     np.testing.assert_allclose(got, want)
     # the cases the test is for are all there: a capped sample, a goal reached early
     assert np.any((want > cap / 4) & np.isfinite(want)) and np.any(want < horizon - 1)
+    # solving only where an agent from the centre can be: the same values there (cells
+    # within box + 2 of the centre at step 1), nothing elsewhere
+    for box in (0, 1):
+        part = hindsight_values(samples, radii, 0.3, 0.1, 0.0, 0.0, res, ok, terminal, goal,
+                                offsets, mid_ok, cap, box)[1]  # fmt: skip
+        c, r = n // 2, box + 2
+        inner = np.zeros((n, n), dtype=bool)
+        inner[c - r : c + r + 1, c - r : c + r + 1] = True
+        np.testing.assert_array_equal(part[inner], got[inner])
+        assert not np.isfinite(part[~inner]).any()
 
 
 def test_hindsight_values_of_a_known_corridor() -> None:

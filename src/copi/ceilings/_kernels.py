@@ -466,7 +466,8 @@ def escape_move(  # type: ignore[no-untyped-def]
 
 @njit(cache=True)
 def hindsight_values(  # type: ignore[no-untyped-def]
-    samples, radii, agent_r, margin, x0, y0, res, ok, terminal, goal, offsets, mid_ok, cap
+    samples, radii, agent_r, margin, x0, y0, res, ok, terminal, goal, offsets, mid_ok, cap,
+    box=-1,
 ):
     """The window's value averaged over the sampled futures, each solved as if known
     (hindsight optimisation: Chong, Givan & Chang 2000; Yoon et al. 2008).
@@ -482,14 +483,24 @@ def hindsight_values(  # type: ignore[no-untyped-def]
     the mean occupancy, so that at a few steps' distance every cell a disc may reach looks
     risky), this plans once per future and averages the plans' costs: it assumes the agent
     will see each future as it comes, which is optimistic (it will see it a step at a
-    time), where the mean-occupancy plan is pessimistic."""
+    time), where the mean-occupancy plan is pessimistic.
+
+    ``box`` >= 0: only the cells an agent starting at the window's centre can be in are
+    solved, those within ``box`` + 2 t cells of the centre at step t (a move goes at most
+    2 cells: ``offsets``); the values there are those of the whole window, the rest of
+    step 1 is left infinite. ``box`` < 0: the whole window."""
     n_s = samples.shape[0]
     horizon = samples.shape[1] - 1
     d = samples.shape[2]
     n = ok.shape[0]
+    c = n // 2
+    lo1, hi1 = 0, n - 1  # the cells of step 1 solved
+    if box >= 0:
+        lo1 = max(c - box - 2, 0)
+        hi1 = min(c + box + 2, n - 1)
     blocked = np.zeros((horizon + 1, n, n), dtype=np.bool_)
     Vn = np.empty((n, n))
-    Vc = np.empty((n, n))
+    Vc = np.full((n, n), np.inf)
     total = np.zeros((n, n))
     for s in range(n_s):
         blocked[:] = False
@@ -513,8 +524,12 @@ def hindsight_values(  # type: ignore[no-untyped-def]
             for j in range(n):
                 Vn[i, j] = terminal[i, j] if not blocked[horizon, i, j] else np.inf
         for t in range(horizon - 1, 0, -1):
-            for i in range(n):
-                for j in range(n):
+            lo, hi = 0, n - 1
+            if box >= 0:
+                lo = max(c - box - 2 * t, 0)
+                hi = min(c + box + 2 * t, n - 1)
+            for i in range(lo, hi + 1):
+                for j in range(lo, hi + 1):
                     if blocked[t, i, j] or not ok[i, j]:
                         Vc[i, j] = np.inf
                         continue
@@ -532,12 +547,12 @@ def hindsight_values(  # type: ignore[no-untyped-def]
                             best = v
                     Vc[i, j] = best
             Vn, Vc = Vc, Vn
-        for i in range(n):
-            for j in range(n):
+        for i in range(lo1, hi1 + 1):
+            for j in range(lo1, hi1 + 1):
                 total[i, j] += min(Vn[i, j], cap)
     V = np.full((horizon + 1, n, n), np.inf)
-    for i in range(n):
-        for j in range(n):
+    for i in range(lo1, hi1 + 1):
+        for j in range(lo1, hi1 + 1):
             if ok[i, j]:
                 V[1, i, j] = total[i, j] / n_s
     return V

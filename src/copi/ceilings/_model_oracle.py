@@ -216,8 +216,10 @@ class ModelOracle(Agent):
             # a future with no way through: the horizon, the farthest distance to go, lost
             fin = terminal[np.isfinite(terminal)]
             cap = self.horizon + (float(fin.max()) if fin.size else 0.0) + self.loss
+            # solved only where the agent can be (the window's centre is its cell; the
+            # move's end, read bilinearly, is within 3 cells of it: box 2 keeps 4)
             V = hindsight_values(samples, radii, self.r, self.margin, wx0, wy0, _RES, ok,
-                                 terminal, goal, _OFFSETS, mid_ok, cap)  # fmt: skip
+                                 terminal, goal, _OFFSETS, mid_ok, cap, 2)  # fmt: skip
         else:
             # a cell stands for positions up to half a cell from its centre
             P = occupancy(samples, radii, self.r, self.margin + _RES / 2, wx0, wy0, _RES, n)

@@ -548,7 +548,7 @@ def _register_builtins() -> None:
     reg("clairvoyant", Clairvoyant, sensing="future", default=True, bound=True,
         summary="a bound: space-time A* on the obstacles' recorded future (they ignore the "
         "agent), its plan replayed through the simulator: the share of episodes solvable")
-    # model-oracle costs 1-3 s an episode (20-40 ms a step): not in the default run; run it
+    # model-oracle costs 0.2-2 s an episode (10-20 ms a step): not in the default run; run it
     # on fewer episodes into the same directory, the report pairs it on those.
     reg("model-oracle", ModelOracle, sensing="oracle", default=False, bound=True,
         summary="a bound: model-predictive control on 32 sampled futures of the obstacles' "

@@ -460,7 +460,11 @@ def main() -> None:
     out.write_text("\n".join(lines) + "\n")
     print(f"wrote {out}")
     if "clairvoyant" in {arm.method for arms in groups.values() for arm in arms}:
-        print(f"wrote {write_bounds_page(bench, a, out.parent / 'benchmark-bounds.md')}")
+        # the episodes the oracle ran (ceilings.py's --oracle-episodes)
+        n_oracle = max((len(rows) for arms in groups.values() for arm, rows in arms.items()
+                        if arm.method == "model-oracle"), default=0)  # fmt: skip
+        page = out.parent / "benchmark-bounds.md"
+        print(f"wrote {write_bounds_page(bench, a, page, n_oracle)}")
     else:  # a store of this script's methods alone: the bounds page is ceilings.py's
         print(f"{bench} holds no bounds (benchmarks/ceilings.py): benchmark-bounds.md kept")
 
@@ -566,19 +570,13 @@ def lean_rows(bench: Path, params: dict, lean_succ: dict, lean_rate: dict,
     return lines
 
 
-def write_bounds_page(bench: Path, a: argparse.Namespace, page: Path) -> Path:
+def write_bounds_page(bench: Path, a: argparse.Namespace, page: Path, n_oracle: int) -> Path:
     """The store's whole benchmark report (every method, the bounds, the RL peers) as the
     docs page ``page``, its figure beside it: the page the README and the analysis pages
-    quote from."""
+    quote from. ``n_oracle``: the episodes model-oracle ran in the store."""
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
     from benchmark_page import write_page
 
-    from copi.experiments.benchmark_report import read_benchmark
-
-    # the episodes the oracle ran (ceilings.py's --oracle-episodes), read from the store
-    groups, _, _ = read_benchmark(bench / "benchmark.sqlite")
-    n_oracle = max((len(rows) for arms in groups.values() for arm, rows in arms.items()
-                    if arm.method == "model-oracle"), default=0)  # fmt: skip
     command = (
         f"`python benchmarks/ceilings.py --bench {a.bench} --episodes {a.episodes} "
         f"--oracle-episodes {n_oracle}` and `python benchmarks/rl_experiments.py --bench "

@@ -219,33 +219,46 @@ def sample_futures(  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
+def _mark_contacts(samples, s, radii, agent_r, margin, x0, y0, res, blocked):  # type: ignore[no-untyped-def]
+    """Sets ``blocked[t, i, j]`` where, in sample ``s`` at step t >= 1, some disc is within
+    the sum of radii plus ``margin`` of the centre of window cell (i, j) (origin x0, y0,
+    side ``res``); cells already set stay set."""
+    horizon = samples.shape[1] - 1
+    n = blocked.shape[1]
+    for t in range(1, horizon + 1):
+        for k in range(samples.shape[2]):
+            reach = agent_r + radii[k] + margin
+            cx = samples[s, t, k, 0]
+            cy = samples[s, t, k, 1]
+            j0 = max(int(math.ceil((cx - reach - x0) / res)), 0)
+            j1 = min(int(math.floor((cx + reach - x0) / res)), n - 1)
+            i0 = max(int(math.ceil((cy - reach - y0) / res)), 0)
+            i1 = min(int(math.floor((cy + reach - y0) / res)), n - 1)
+            r2 = reach * reach
+            for i in range(i0, i1 + 1):
+                py = y0 + i * res - cy
+                for j in range(j0, j1 + 1):
+                    px = x0 + j * res - cx
+                    if px * px + py * py <= r2:
+                        blocked[t, i, j] = True
+
+
+@njit(cache=True)
 def occupancy(samples, radii, agent_r, margin, x0, y0, res, n):  # type: ignore[no-untyped-def]
     """``P[t, i, j]``: the share of samples in which some disc, at step t, is within the
     sum of radii plus ``margin`` of the centre of window cell (i, j) (origin x0, y0, side
     ``res``, n x n cells)."""
     n_s = samples.shape[0]
     horizon = samples.shape[1] - 1
-    d = samples.shape[2]
     count = np.zeros((horizon + 1, n, n), dtype=np.int32)
-    stamp = np.full((horizon + 1, n, n), -1, dtype=np.int32)
+    blocked = np.zeros((horizon + 1, n, n), dtype=np.bool_)
     for s in range(n_s):
+        blocked[:] = False
+        _mark_contacts(samples, s, radii, agent_r, margin, x0, y0, res, blocked)
         for t in range(1, horizon + 1):
-            for k in range(d):
-                reach = agent_r + radii[k] + margin
-                cx = samples[s, t, k, 0]
-                cy = samples[s, t, k, 1]
-                j0 = max(int(math.ceil((cx - reach - x0) / res)), 0)
-                j1 = min(int(math.floor((cx + reach - x0) / res)), n - 1)
-                i0 = max(int(math.ceil((cy - reach - y0) / res)), 0)
-                i1 = min(int(math.floor((cy + reach - y0) / res)), n - 1)
-                r2 = reach * reach
-                for i in range(i0, i1 + 1):
-                    py = y0 + i * res - cy
-                    for j in range(j0, j1 + 1):
-                        px = x0 + j * res - cx
-                        if px * px + py * py <= r2 and stamp[t, i, j] != s:
-                            stamp[t, i, j] = s
-                            count[t, i, j] += 1
+            for i in range(n):
+                for j in range(n):
+                    count[t, i, j] += blocked[t, i, j]
     out = np.empty((horizon + 1, n, n))
     for t in range(horizon + 1):
         for i in range(n):
@@ -491,7 +504,6 @@ def hindsight_values(  # type: ignore[no-untyped-def]
     step 1 is left infinite. ``box`` < 0: the whole window."""
     n_s = samples.shape[0]
     horizon = samples.shape[1] - 1
-    d = samples.shape[2]
     n = ok.shape[0]
     c = n // 2
     lo1, hi1 = 0, n - 1  # the cells of step 1 solved
@@ -504,22 +516,7 @@ def hindsight_values(  # type: ignore[no-untyped-def]
     total = np.zeros((n, n))
     for s in range(n_s):
         blocked[:] = False
-        for t in range(1, horizon + 1):
-            for k in range(d):
-                reach = agent_r + radii[k] + margin
-                cx = samples[s, t, k, 0]
-                cy = samples[s, t, k, 1]
-                j0 = max(int(math.ceil((cx - reach - x0) / res)), 0)
-                j1 = min(int(math.floor((cx + reach - x0) / res)), n - 1)
-                i0 = max(int(math.ceil((cy - reach - y0) / res)), 0)
-                i1 = min(int(math.floor((cy + reach - y0) / res)), n - 1)
-                r2 = reach * reach
-                for i in range(i0, i1 + 1):
-                    py = y0 + i * res - cy
-                    for j in range(j0, j1 + 1):
-                        px = x0 + j * res - cx
-                        if px * px + py * py <= r2:
-                            blocked[t, i, j] = True
+        _mark_contacts(samples, s, radii, agent_r, margin, x0, y0, res, blocked)
         for i in range(n):
             for j in range(n):
                 Vn[i, j] = terminal[i, j] if not blocked[horizon, i, j] else np.inf

@@ -157,13 +157,32 @@ def test_the_model_oracle_dodges_a_disc_coming_at_it() -> None:
     assert oracle.outcome == "success" and oracle.contacts == 0, oracle
 
 
+@pytest.mark.parametrize("width", [5.0, 4.0])
+def test_the_greedy_oracle_dodges_by_its_two_step_check_alone(width: float) -> None:
+    """plan="greedy" plans nothing through the discs' futures: only the first move's
+    check (in contact, or no second move clear) keeps it off the disc coming at it; it
+    gives way in the corridors 5 and 4 wide and reaches the goal without contact."""
+    out = run_episode(ModelOracle(plan="greedy"), _corridor(12.0, math.pi, 0.8, width),
+                      sensing="oracle", max_steps=80)  # fmt: skip
+    assert out.outcome == "success" and out.contacts == 0, out
+
+
+def test_the_greedy_oracle_goes_straight_where_nothing_moves_near() -> None:
+    """With the only disc far behind it, the greedy plan's value is the distance to go: a
+    full step along the corridor each step, home in the least number of steps."""
+    sim = _corridor(0.5, math.pi, 0.0, 5.0)  # a disc parked behind the start
+    out = run_episode(ModelOracle(plan="greedy"), sim, sensing="oracle", max_steps=80)
+    assert out.outcome == "success"
+    assert out.steps == math.ceil(28 - 2 - sim.goal_tolerance)
+
+
 @pytest.mark.parametrize(
     ("kwargs", "message"),
     [({"samples": 0}, "samples must be a whole number in 1 .. 256"),
      ({"horizon": 1}, "horizon must be a whole number in 2 .. 40"),
      ({"risk": math.nan}, "risk must be a number in [0, 10000]"),
      ({"discount": 0.0}, "discount must be a number in (0, 1]"),
-     ({"plan": "median"}, "plan must be one of hindsight, mean; got 'median'"),
+     ({"plan": "median"}, "plan must be one of hindsight, mean, greedy; got 'median'"),
      ({"escape": -1.0}, "escape must be a number in [0, 10000]")],
 )  # fmt: skip
 def test_model_oracle_parameters_are_checked(kwargs: dict, message: str) -> None:

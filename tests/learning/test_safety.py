@@ -5,6 +5,7 @@ symmetry, files, and the learnt agent's ablation (nothing learnt = compass-guard
 from __future__ import annotations
 
 import copy
+import math
 
 import numpy as np
 import pytest
@@ -18,15 +19,19 @@ from copi.experiments.navigation import draw_episode
 from copi.learning import Capabilities, LearnParams, learn, simulated_steps
 from copi.learning._safety import (
     SafetyModel,
+    _probe_row,
     kernel_net,
     predict,
+    probe_states,
     ring_features,
     safety_features,
     safety_probabilities,
+    second_move_clear,
     template_priors,
 )
 from copi.learning._symmetry import SymmetryGroup, ring_operators
 from copi.online import LearntAgent
+from copi.world import Simulator, World
 
 
 @pytest.fixture(scope="module")
@@ -274,3 +279,66 @@ def test_the_learning_samples_counted_are_the_states_probed(learnt: Capabilities
     assert cost["total"] == 900 + 8 * 60 + cost["probes"]
     odd = simulated_steps({**learnt.params, "probe_steps": 61, "safety": False})
     assert odd["walks"] == odd["probes"] == 0 and odd["total"] == 900
+
+
+def _head_on(disc_x: float) -> tuple[Simulator, np.ndarray]:
+    """An open room; the agent at (20, 20) and a disc of radius 0.5 at (disc_x, 20) coming
+    straight at it at 0.8 a step (no turning). Returns the simulator and the probe's
+    actions (16 compass directions, then waiting)."""
+    w = World([[0, 0], [40, 0], [40, 40], [0, 40]])
+    sim = Simulator(w, [20, 20], [35, 35], [[disc_x, 20.0]], [0.5], seed=0, speed=0.8,
+                    turn_sd=0.0)  # fmt: skip
+    sim.headings[:] = math.pi
+    a = 2 * np.pi * np.arange(16) / 16
+    return sim, np.vstack([np.column_stack([np.cos(a), np.sin(a)]), np.zeros((1, 2))])
+
+
+def test_an_escape_probe_judges_the_first_move_by_the_moves_it_leaves() -> None:
+    """A disc 3.5 ahead coming at the agent: stepping towards it once touches nothing (the
+    gap after it is 1.7 - 0.8 = 0.9) but holding that direction meets it on the second
+    step. The hold label says unsafe; the escape label says safe (stepping back then
+    clears the disc's next step by 1.1). Moving away is safe by both; a disc 1.6 ahead
+    is met by the first step towards it (closest approach 0): unsafe by both."""
+    sim, actions = _head_on(23.5)
+    seconds = np.ascontiguousarray(np.vstack([actions[:16], 0.5 * actions[:16], [[0, 0]]]))
+    hold = _probe_row(sim, actions, 3, "hold", seconds)
+    escape = _probe_row(sim, actions, 3, "escape", seconds)
+    assert not hold[0] and escape[0]
+    assert hold[8] and escape[8]  # west: away from the disc
+    near, _ = _head_on(21.6)
+    assert not _probe_row(near, actions, 3, "hold", seconds)[0]
+    assert not _probe_row(near, actions, 3, "escape", seconds)[0]
+    # the probe forks: the simulator itself has not moved
+    assert sim.t == 0 and sim.centers[0, 0] == 23.5
+
+
+def test_second_move_clear_needs_one_move_that_keeps_its_room() -> None:
+    """Against the simulator's closest-approach test evaluated here: a disc of radius 0.5
+    coming down at 0.8 a step onto the agent (radius 0.3). Waiting is in contact; a step
+    east passes it with about 0.29 to spare: a clear move for a room of 0 or 0.2, none for
+    0.5. A wall just east of the agent stops that step short: no clear move then."""
+    from copi.geometry._kernels import _closest_approach
+
+    segs = np.zeros((0, 4))
+    moves = np.array([[1.0, 0.0], [0.0, 0.0]])
+    c1, c2 = np.array([[20.0, 21.4]]), np.array([[20.0, 20.6]])
+    gaps = [_closest_approach(20.0, 20.0, dx, dy, 20.0, 21.4, 0.0, -0.8) - 0.8
+            for dx, dy in moves]  # fmt: skip
+    assert gaps[1] < 0 < 0.2 < gaps[0] < 0.5
+    for clear in (0.0, 0.2, 0.5):
+        want = any(g >= clear for g in gaps)
+        assert second_move_clear(20.0, 20.0, 0.3, segs, c1, c2, np.array([0.5]), moves,
+                                 clear) == want  # fmt: skip
+    wall = np.array([[20.6, 0.0, 20.6, 40.0]])
+    assert not second_move_clear(20.0, 20.0, 0.3, wall, c1, c2, np.array([0.5]), moves, 0.0)
+
+
+def test_escape_probes_are_counted_and_the_label_is_checked() -> None:
+    p = LearnParams(directions=16, safety=True, probe_label="escape")
+    # every second state of 60 walks of 150 steps, each of 17 actions once, and the
+    # obstacles' two steps alone
+    assert simulated_steps(p)["probes"] == 60 * 75 * (17 + 2)
+    with pytest.raises(InvalidArgumentError, match="probe_label must be one of hold, escape"):
+        LearnParams(safety=True, probe_label="hindsight")
+    with pytest.raises(InvalidArgumentError, match="probe label must be one of hold, escape"):
+        probe_states("crowd", 1, 2, seed=0, n_directions=16, label="held")

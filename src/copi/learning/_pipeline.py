@@ -23,7 +23,7 @@ from copi.learning._contexts import (
 from copi.learning._explore import explore
 from copi.learning._gng import GrowingNeuralGas
 from copi.learning._policies import ActionPriors, AStarLearner, ValueIterationLearner, compass
-from copi.learning._safety import learn_safety, probe_states
+from copi.learning._safety import PROBE_LABELS, learn_safety, probe_states
 from copi.learning._skeleton import bootstrap_landmarks, skeletonize
 from copi.learning._symmetry import SymmetryGroup, reduce_landmarks, ring_operators
 from copi.world import RangeSensor, check_family
@@ -90,6 +90,10 @@ class LearnParams:
     """Steps each probed action is held while the obstacles move."""
     probe_families: str = "star,crowd,polygon,indoor"
     """Comma-separated world families of the probing walks (task-independent: no goal)."""
+    probe_label: str = "hold"
+    """How a probe is judged safe: ``"hold"`` (its action held ``probe_horizon`` steps
+    without contact) or ``"escape"`` (taken once, leaving a clear second move: the
+    model-oracle's check; see :mod:`copi.learning._safety`)."""
     motion: bool = False
     """Contexts that see motion: the context map, landmarks, templates and priors live
     on [reading, its change since the last step] (see :mod:`copi.learning._contexts`),
@@ -117,6 +121,10 @@ class LearnParams:
                 )
         for fam in self.probe_families.split(","):
             check_family(fam.strip())
+        if self.probe_label not in PROBE_LABELS:
+            raise InvalidArgumentError(
+                f"probe_label must be one of {', '.join(PROBE_LABELS)}; got {self.probe_label!r}"
+            )
         if self.learner not in ("astar", "value-iteration"):
             raise InvalidArgumentError(
                 f"learner must be 'astar' or 'value-iteration'; got {self.learner!r}"
@@ -142,7 +150,9 @@ def simulated_steps(params: LearnParams | Mapping[str, Any]) -> dict[str, int]:
     counted as a reinforcement learner's environment steps are. ``exploration`` (worlds x
     steps), and with safety priors the probing ``walks`` and at most ``probes`` steps of
     counterfactual probes (every second state of a walk, each of the directions and
-    waiting held ``probe_horizon`` steps; fewer where a probe touches something).
+    waiting held ``probe_horizon`` steps, fewer where a probe touches something; with
+    ``probe_label="escape"`` each taken once, and two steps of the obstacles alone a
+    state: the second moves are judged against those, not simulated).
     ``params`` may be a capabilities file's ``params``.
 
     Examples
@@ -159,7 +169,8 @@ def simulated_steps(params: LearnParams | Mapping[str, Any]) -> dict[str, int]:
     explore_steps = p.worlds * p.steps
     walks = p.probe_worlds * p.probe_steps if p.safety else 0
     probed = p.probe_worlds * ((p.probe_steps + 1) // 2) if p.safety else 0
-    probes = probed * (p.directions + 1) * p.probe_horizon
+    per = p.probe_horizon if p.probe_label == "hold" else 1
+    probes = probed * ((p.directions + 1) * per + (2 if p.probe_label == "escape" else 0))
     return {"exploration": explore_steps, "walks": walks, "probes": probes,
             "total": explore_steps + walks + probes}  # fmt: skip
 
@@ -296,7 +307,7 @@ def learn(params: LearnParams | None = None, *, progress: Progress | None = None
             tuple(f.strip() for f in p.probe_families.split(",")), p.probe_worlds,
             p.probe_steps, seed=p.seed, n_directions=p.directions, horizon=p.probe_horizon,
             agent_radius=p.agent_radius, sensor=sensor,
-            progress=lambda k, n: report("safety probes", k, n),
+            progress=lambda k, n: report("safety probes", k, n), label=p.probe_label,
         )  # fmt: skip
         probed = (
             motion_contexts(probes.readings, probes.previous) if p.motion else probes.readings

@@ -64,6 +64,7 @@ def _one_line_error(code: int, err: str) -> str:
         ["learn", "-o", "c.npz", "--directions", "four"],
         ["learn", "-o", "c.npz", "--probe-families", "star,nowhere"],
         ["learn", "-o", "c.npz", "--probe-steps", "0"],
+        ["learn", "-o", "c.npz", "--probe-label", "held"],
         ["nosuch"],
         ["world", "nosuch"],
         ["world", "sample", "-n", "0", "-o", "w.json"],

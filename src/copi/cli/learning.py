@@ -67,6 +67,12 @@ def learn_command(
         typer.Option("--probe-families", help="Comma-separated families of the probing "
                      "walks (task-free)."),
     ] = "star,crowd,polygon,indoor",
+    probe_label: Annotated[
+        str,
+        typer.Option("--probe-label", help="How a probe is judged safe: hold (its move held "
+                     "3 steps without contact) or escape (taken once, leaving a clear "
+                     "second move: the model-oracle's check)."),
+    ] = "hold",
     motion: Annotated[
         bool,
         typer.Option(
@@ -121,6 +127,7 @@ def learn_command(
         probe_worlds=probe_worlds,
         probe_steps=probe_steps,
         probe_families=probe_families,
+        probe_label=probe_label,
     )
     check_outputs({"the capabilities file": (output, "npz")})
     output.parent.mkdir(parents=True, exist_ok=True)

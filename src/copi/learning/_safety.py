@@ -7,9 +7,9 @@ while the obstacles keep moving (all copies see the same obstacle motion). A pro
 *safe* when no moving obstacle touches the agent meanwhile (``label="hold"``, the
 default). With ``label="escape"`` the action is taken once and the probe is safe when it
 touches nothing and leaves a second move (a compass direction at full or half speed, or
-waiting) that passes every obstacle's next step with ``clear`` to spare: the model-
-predictive oracle's own check of a first move (:mod:`copi.ceilings`), on the probe's real
-future. The second label is what a controller that turns needs (holding a direction is
+waiting) that passes every obstacle's next step with :data:`ESCAPE_CLEAR` to spare:
+the model-predictive oracle's own check of a first move (:mod:`copi.ceilings`), on the
+probe's real future. The second label is what a controller that turns needs (holding a direction is
 not what it will do), and the oracle with that check alone, planning nothing further,
 succeeds in 111 of 200 validation crowd episodes against compass-guard's 86
 (``docs/analysis/benchmark.md``).

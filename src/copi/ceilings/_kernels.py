@@ -273,6 +273,24 @@ def _risk(p):  # type: ignore[no-untyped-def]
     return -math.log(1.0 - min(p, 0.999))
 
 
+@njit(cache=True, inline="always")
+def _best_move(Vn, cost, i, j, offsets, mid_ok):  # type: ignore[no-untyped-def]
+    """The least value of a move from cell (i, j) into the next step's layer: over the
+    ``offsets`` that stay in the window and clear of walls (``mid_ok``), ``Vn`` plus
+    ``cost`` at the cell reached (inf if none; an infinite ``Vn`` stays infinite)."""
+    n = Vn.shape[0]
+    best = np.inf
+    for o in range(offsets.shape[0]):
+        a = i + offsets[o, 0]
+        b = j + offsets[o, 1]
+        if a < 0 or b < 0 or a >= n or b >= n or not mid_ok[o, i, j]:
+            continue
+        v = Vn[a, b] + cost[a, b]
+        if v < best:
+            best = v
+    return best
+
+
 @njit(cache=True)
 def risk_values(P, ok, terminal, goal, offsets, mid_ok, weight, discount):  # type: ignore[no-untyped-def]
     """Backward induction over the window. ``cost[t, i, j]`` = one step plus ``weight``
@@ -300,19 +318,7 @@ def risk_values(P, ok, terminal, goal, offsets, mid_ok, weight, discount):  # ty
                     continue
                 if not ok[i, j]:
                     continue
-                best = np.inf
-                for o in range(offsets.shape[0]):
-                    a = i + offsets[o, 0]
-                    b = j + offsets[o, 1]
-                    if a < 0 or b < 0 or a >= n or b >= n or not mid_ok[o, i, j]:
-                        continue
-                    v = V[t + 1, a, b]
-                    if not math.isfinite(v):
-                        continue
-                    v += cost[t + 1, a, b]
-                    if v < best:
-                        best = v
-                V[t, i, j] = best
+                V[t, i, j] = _best_move(V[t + 1], cost[t + 1], i, j, offsets, mid_ok)
     return V, cost
 
 
@@ -513,6 +519,7 @@ def hindsight_values(  # type: ignore[no-untyped-def]
     blocked = np.zeros((horizon + 1, n, n), dtype=np.bool_)
     Vn = np.empty((n, n))
     Vc = np.full((n, n), np.inf)
+    step = np.ones((n, n))  # every move costs one step
     total = np.zeros((n, n))
     for s in range(n_s):
         blocked[:] = False
@@ -533,16 +540,7 @@ def hindsight_values(  # type: ignore[no-untyped-def]
                     if goal[i, j]:
                         Vc[i, j] = 0.0
                         continue
-                    best = np.inf
-                    for o in range(offsets.shape[0]):
-                        a = i + offsets[o, 0]
-                        b = j + offsets[o, 1]
-                        if a < 0 or b < 0 or a >= n or b >= n or not mid_ok[o, i, j]:
-                            continue
-                        v = Vn[a, b] + 1.0
-                        if v < best:
-                            best = v
-                    Vc[i, j] = best
+                    Vc[i, j] = _best_move(Vn, step, i, j, offsets, mid_ok)
             Vn, Vc = Vc, Vn
         for i in range(lo1, hi1 + 1):
             for j in range(lo1, hi1 + 1):

@@ -307,3 +307,16 @@ def test_reproduce_into_a_directory_of_another_run_says_what_to_do(
         f"copi: error: {tmp_path / 'res'} holds results of a --quick run or of other settings; "
         f"reproduce into another directory, or delete {tmp_path / 'res'} to start over"
     )
+
+
+def test_learn_with_static_aware_safety(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    caps = tmp_path / "caps.npz"
+    code, out, err = run(
+        ["learn", "-o", str(caps), "--preset", "learnt", "--worlds", "3", "--steps", "80",
+         "--probe-worlds", "2", "--probe-steps", "20", "--probe-label", "escape",
+         "--safety-static"], capsys,
+    )  # fmt: skip
+    assert code == 0, err
+    code, out, _ = run(["inspect", str(caps), "--json"], capsys)
+    params = json.loads(out)["params"]
+    assert params["safety_static"] is True and params["probe_label"] == "escape"

@@ -5,6 +5,8 @@ symmetry, files, and the learnt agent's ablation (nothing learnt = compass-guard
 from __future__ import annotations
 
 import copy
+import dataclasses
+import json
 import math
 
 import numpy as np
@@ -44,9 +46,12 @@ def _net(seed: int, hidden: int = 5, rays: int = 32) -> np.ndarray:
     return np.random.default_rng(seed).normal(0, 0.3, (2, hidden + 1, 1 + 4 * rays))
 
 
-def _probs(s: np.ndarray, prev: np.ndarray, net: np.ndarray, n_dir: int = 16) -> np.ndarray:
+def _probs(
+    s: np.ndarray, prev: np.ndarray, net: np.ndarray, n_dir: int = 16, static: np.ndarray | None = None
+) -> np.ndarray:
     out = np.empty(n_dir + 1)
-    safety_probabilities(s, prev, kernel_net(net), n_dir, np.empty(8 * len(s)), out)
+    st_ = np.full(len(s), np.inf) if static is None else static
+    safety_probabilities(s, prev, st_, kernel_net(net), n_dir, np.empty(8 * len(s)), out)
     return out
 
 
@@ -59,30 +64,51 @@ runs = st.lists(st.sampled_from([0.5, 2.0, 10.0, 0.0, -0.0]) | st.floats(0.0, 10
 
 
 @settings(max_examples=60, deadline=None)
-@given(s=runs, prev=runs, same=st.booleans(), shift=st.integers(0, 31))
-def test_ring_features_equal_the_training_features_bitwise(s, prev, same, shift) -> None:
+@given(s=runs, prev=runs, same=st.booleans(), shift=st.integers(0, 31),
+       walls=st.lists(st.sampled_from([0.0, 0.04, 0.05, 0.06, 1.0, np.inf]), min_size=32,
+                      max_size=32).map(np.array))  # fmt: skip
+def test_ring_features_equal_the_training_features_bitwise(s, prev, same, shift, walls) -> None:
     """What the kernels evaluate online (each block a ray at a time, exponentials
     skipped where they are not needed) is, to the last bit, what the network was
-    trained on."""
+    trained on; with and without a static reading (here the reading plus 0 to 0.06, 1
+    or inf: the hit explained by the static map, just not, or unknown)."""
     prev = s.copy() if same else prev
-    feat = np.empty(8 * 32)
-    ring_features(s, prev, feat)
     n = 32
-    turned = np.concatenate([feat[2 * b * n + shift : 2 * b * n + shift + n] for b in range(4)])
-    want = safety_features(s, prev, shift)
-    assert turned.tobytes() == want.tobytes()
+    for static in (None, s + walls):
+        feat = np.empty(8 * n)
+        ring_features(s, prev, np.full(n, np.inf) if static is None else static, feat)
+        turned = np.concatenate([feat[2 * b * n + shift : 2 * b * n + shift + n] for b in range(4)])
+        want = safety_features(s, prev, shift, static=static)
+        assert turned.tobytes() == want.tobytes()
+
+
+def test_the_closeness_block_sees_what_the_static_map_does_not_explain() -> None:
+    """A hit at 1 on ray 3: without a map it is close; with a map showing a wall there
+    it is the wall's (0); with a map showing the wall at 4 it is something that moves."""
+    s = np.full(32, 10.0)
+    s[3] = 1.0
+    block = slice(2 * 32, 3 * 32)
+    unknown = safety_features(s, s, 0)[block]
+    wall = safety_features(s, s, 0, static=s)[block]
+    far = s.copy()
+    far[3] = 4.0
+    disc = safety_features(s, s, 0, static=far)[block]
+    assert unknown[3] == disc[3] == math.exp(-1.0) and wall[3] == 0.0
+    assert np.all(np.delete(wall, 3) == 0.0) and np.all(np.delete(disc, 3) == 0.0)
 
 
 @settings(max_examples=30, deadline=None)
-@given(s=readings, prev=readings, seed=st.integers(0, 100), k=st.integers(0, 15))
-def test_the_network_is_one_model_turned_to_each_direction(s, prev, seed, k) -> None:
+@given(s=readings, prev=readings, static=readings, seed=st.integers(0, 100),
+       k=st.integers(0, 15))  # fmt: skip
+def test_the_network_is_one_model_turned_to_each_direction(s, prev, static, seed, k) -> None:
     net = _net(seed)
-    p = _probs(s, prev, net)
-    ref = [predict(net[0], safety_features(s, prev, 2 * d)[None])[0] for d in range(16)]
+    p = _probs(s, prev, net, static=static)
+    ref = [predict(net[0], safety_features(s, prev, 2 * d, static=static)[None])[0]
+           for d in range(16)]  # fmt: skip
     assert np.allclose(p[:16], ref, atol=1e-9)
-    assert np.isclose(p[16], predict(net[1], safety_features(s, prev, 0)[None])[0])
+    assert np.isclose(p[16], predict(net[1], safety_features(s, prev, 0, static=static)[None])[0])
     # the reading turned by k directions: direction d + k now is what d was
-    turned = _probs(np.roll(s, 2 * k), np.roll(prev, 2 * k), net)
+    turned = _probs(np.roll(s, 2 * k), np.roll(prev, 2 * k), net, static=np.roll(static, 2 * k))
     assert np.allclose(turned[(np.arange(16) + k) % 16], p[:16], atol=1e-9)
 
 
@@ -159,6 +185,50 @@ def test_waiting_is_chosen_when_the_network_says_only_waiting_is_safe(learnt) ->
         agent.act(Observation(np.full(32, np.nan), np.array([5.0, 0.0])))
 
 
+def test_the_networks_see_the_static_reading_only_when_learnt_with_it(learnt) -> None:
+    """A wall at 1 on ray 0 that the static map explains: a network learnt with static
+    readings is handed them (its closeness block empty: nothing moves), one learnt
+    without is not (the wall close, as in learning); the guard sees them either way."""
+    from copi.core import Observation, Task
+
+    s = np.full(32, 10.0)
+    s[0] = 1.0
+    net = _net(4, hidden=16)
+    seen = []
+    for aware in (False, True):
+        model = SafetyModel(net, learnt.safety.template_safe, learnt.safety.template_counts,
+                            aware)  # fmt: skip
+        agent = LearntAgent(learnt, safety=model, alpha=1.0, wait=True)  # waiting: all judged
+        agent.reset(Task("map", 0.3, 0.5, 32, 10.0))
+        agent.act(Observation(s, np.array([5.0, 0.0]), static=s.copy()))
+        want = _probs(s, s, net, static=s if aware else None)
+        assert np.allclose(agent._p, want, atol=1e-12)
+        seen.append(agent._p.copy())
+    assert not np.allclose(seen[0], seen[1])
+    assert np.allclose(seen[0], _probs(s, s, net))  # unaware: as if no map were given
+
+
+def test_static_aware_capabilities_round_trip_and_the_flag_is_checked(tmp_path) -> None:
+    caps = learn(LearnParams(worlds=3, steps=80, directions=16, safety=True, probe_worlds=2,
+                             probe_steps=20, safety_static=True))  # fmt: skip
+    assert caps.safety is not None and caps.safety.static_aware
+    back = Capabilities.load(caps.save(tmp_path / "s.npz"))
+    assert back.safety is not None and back.safety.static_aware and back.equals(caps)
+    # a model handed in place of the learnt one is recorded as it is
+    plain = dataclasses.replace(caps, safety=dataclasses.replace(caps.safety, static_aware=False))
+    again = Capabilities.load(plain.save(tmp_path / "p.npz"))
+    assert again.safety is not None and not again.safety.static_aware
+    bad = dict(np.load(tmp_path / "s.npz"))
+    meta = json.loads(str(bad["metadata"]))
+    meta["params"]["safety_static"] = "yes"
+    bad["metadata"] = np.array(json.dumps(meta))
+    np.savez(tmp_path / "bad.npz", **bad)
+    with pytest.raises(CapabilitiesFormatError, match="safety_static must be true or false; got 'yes'"):
+        Capabilities.load(tmp_path / "bad.npz")
+    with pytest.raises(InvalidArgumentError, match="safety_static must be True or False"):
+        LearnParams(safety_static=1)
+
+
 @settings(max_examples=60, deadline=None)
 @given(data=st.data())
 def test_scoring_only_the_promising_directions_chooses_as_scoring_all(learnt, data) -> None:
@@ -175,13 +245,14 @@ def test_scoring_only_the_promising_directions_chooses_as_scoring_all(learnt, da
     keep = data.draw(st.integers(-1, 15))
     persist = data.draw(st.sampled_from([0.0, 0.05, 0.5]))
     prev_landmark = data.draw(st.integers(-1, int(agent._landmarks.max())))
+    aware = data.draw(st.booleans())
     outs = []
     for lazy in (True, False):
         out, p = np.empty(5), np.empty(17)
         _kernels.decide_learnt(
             s, prev, static, agent._nodes_t, agent._prior, net, aim[0], aim[1], 5.0, 1.05,
             2.0, agent.beta, False, agent._cos, agent._sin, 10.0, agent._compass, np.empty(8 * 32), p, out,
-            agent._landmarks, prev_landmark, keep, persist, lazy,
+            agent._landmarks, prev_landmark, keep, persist, lazy, aware,
         )  # fmt: skip
         outs.append((out.copy(), p.copy()))
     (a, pa), (b, pb) = outs
@@ -202,16 +273,19 @@ def test_a_batch_decides_as_one_agent_at_a_time(learnt) -> None:
     want[7] = 0.0  # no direction: no motion
     reach = rng.uniform(0.2, 20.0, 100)
     static = np.where(rng.random((100, 32)) < 0.5, s, np.inf)
-    actions, nodes = agent.decide_batch(s, prev, want, reach, static)
-    for i in range(100):
-        out, p = np.empty(5), np.empty(17)
-        _kernels.decide_learnt(
-            s[i], prev[i], static[i], agent._nodes_t, agent._prior, agent._net, want[i, 0],
-            want[i, 1], reach[i], 1.05, 2.0, 0.5, False, agent._cos, agent._sin, 10.0, agent._compass,
-            np.empty(256), p, out, agent._landmarks, -1, -1, 0.0,
-        )  # fmt: skip
-        assert np.array_equal(actions[i], out[:2]) and nodes[i] == out[2]
-    assert np.array_equal(actions[7], [0.0, 0.0])
+    for aware in (False, True):
+        agent.model = dataclasses.replace(agent.model, static_aware=aware)
+        actions, nodes = agent.decide_batch(s, prev, want, reach, static)
+        for i in range(100):
+            out, p = np.empty(5), np.empty(17)
+            _kernels.decide_learnt(
+                s[i], prev[i], static[i], agent._nodes_t, agent._prior, agent._net, want[i, 0],
+                want[i, 1], reach[i], 1.05, 2.0, 0.5, False, agent._cos, agent._sin, 10.0,
+                agent._compass, np.empty(256), p, out, agent._landmarks, -1, -1, 0.0, True,
+                aware,
+            )  # fmt: skip
+            assert np.array_equal(actions[i], out[:2]) and nodes[i] == out[2]
+        assert np.array_equal(actions[7], [0.0, 0.0])
     with pytest.raises(InvalidArgumentError, match="previous readings must have shape"):
         agent.decide_batch(s, prev[:3], want)
     bad = s.copy()

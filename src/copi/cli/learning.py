@@ -73,6 +73,12 @@ def learn_command(
                      "3 steps without contact) or escape (taken once, leaving a clear "
                      "second move: the model-oracle's check)."),
     ] = "hold",
+    safety_static: Annotated[
+        bool,
+        typer.Option("--safety-static", help="The safety networks learn with the static "
+                     "map's reading (what a map-level agent is handed), so that they tell "
+                     "what moves from walls."),
+    ] = False,
     motion: Annotated[
         bool,
         typer.Option(
@@ -128,6 +134,7 @@ def learn_command(
         probe_steps=probe_steps,
         probe_families=probe_families,
         probe_label=probe_label,
+        safety_static=safety_static,
     )
     check_outputs({"the capabilities file": (output, "npz")})
     output.parent.mkdir(parents=True, exist_ok=True)

@@ -194,7 +194,7 @@ class Capabilities:
             "words": self.group.words,
             "directions": self.policies.names,
             "learner": self.policies.learner,
-            "params": self.params,
+            "params": self._params(),
             "stats": _without_timings(self.stats),
         }
         arrays = self._arrays()
@@ -287,7 +287,8 @@ class Capabilities:
             else None
         )
         safety = (
-            SafetyModel(a["safety_net"], a["safety_template"], a["safety_counts"])
+            SafetyModel(a["safety_net"], a["safety_template"], a["safety_counts"],
+                        bool(meta.get("params", {}).get("safety_static", False)))
             if all(k in a for k in _SAFETY)
             else None
         )
@@ -304,6 +305,15 @@ class Capabilities:
             stats=dict(meta.get("stats", {})),
         )
 
+    def _params(self) -> dict[str, Any]:
+        """The parameters a file records: the learning's, and whether its safety
+        networks see the static reading (a model given in place of the learnt one says)."""
+        if self.safety is None:
+            return self.params
+        if self.params.get("safety_static", False) == self.safety.static_aware:
+            return self.params
+        return {**self.params, "safety_static": self.safety.static_aware}
+
     def equals(self, other: Capabilities) -> bool:
         """Same arrays and metadata (used to check a save/load round trip)."""
         a, b = self._arrays(), other._arrays()
@@ -314,7 +324,7 @@ class Capabilities:
             and self.policies.names == other.policies.names
             and self.policies.learner == other.policies.learner
             and self.landmarks.k == other.landmarks.k
-            and self.params == other.params
+            and self._params() == other._params()
             and _without_timings(self.stats) == _without_timings(other.stats)
         )
 
@@ -332,6 +342,9 @@ def _check_consistent(p: Path, c: Capabilities) -> None:
     if not isinstance(motion, bool):
         problems.append(f"motion must be true or false; got {motion!r}")
         motion = False
+    static = c.params.get("safety_static", False)
+    if not isinstance(static, bool):
+        problems.append(f"safety_static must be true or false; got {static!r}")
     blocks = context_blocks(motion)
     rays = c.params.get("n_rays", dim // blocks)
     if rays * blocks != dim:

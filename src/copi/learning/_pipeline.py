@@ -94,6 +94,11 @@ class LearnParams:
     """How a probe is judged safe: ``"hold"`` (its action held ``probe_horizon`` steps
     without contact) or ``"escape"`` (taken once, leaving a clear second move: the
     model-oracle's check; see :mod:`copi.learning._safety`)."""
+    safety_static: bool = False
+    """The safety networks learn with the static map's reading (what a ``map``-level
+    agent is handed): their closeness block then sees only the hits the static map does
+    not explain, i.e. what moves. Off by default (the registered preset's networks see
+    the reading alone, at every level)."""
     motion: bool = False
     """Contexts that see motion: the context map, landmarks, templates and priors live
     on [reading, its change since the last step] (see :mod:`copi.learning._contexts`),
@@ -114,7 +119,7 @@ class LearnParams:
             or self.map_seed < 0
         ):  # fmt: skip
             raise InvalidArgumentError(f"map_seed must be an int >= 0; got {self.map_seed!r}")
-        for name in ("safety", "motion"):
+        for name in ("safety", "motion", "safety_static"):
             if not isinstance(getattr(self, name), bool):
                 raise InvalidArgumentError(
                     f"{name} must be True or False; got {getattr(self, name)!r}"
@@ -316,6 +321,7 @@ def learn(params: LearnParams | None = None, *, progress: Progress | None = None
         safety, safety_stats = learn_safety(
             probes, p.directions, red.template_of[landmark],
             group.matrices[red.element[landmark]], len(red.templates), seed=p.seed,
+            static_aware=p.safety_static,
         )  # fmt: skip
         stages.append({"stage": "safety", **safety_stats, "seconds": time.perf_counter() - t0})
     return Capabilities(

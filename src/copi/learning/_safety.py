@@ -34,6 +34,7 @@ Two things are learnt from the probes, both task-independent:
 from __future__ import annotations
 
 import copy
+import dataclasses
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -68,7 +69,11 @@ CAP = 4.0
 DELTA = 1.5
 """Changes of a range between steps are clipped to +-this."""
 N_BLOCKS = 4
-"""Feature blocks per ray: near range, its change, closeness, approach when close."""
+"""Feature blocks per ray: near range, its change, closeness of what moves, approach when
+close."""
+EXPLAINED = 0.05
+"""A hit within this of the static map's reading is the static map's (a wall): the
+guards' test (:mod:`copi.online._kernels`)."""
 
 
 @njit(cache=True, inline="always")
@@ -83,7 +88,7 @@ def _change(r, p):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True, inline="always")
-def _feature(s, prev, i, block):  # type: ignore[no-untyped-def]
+def _feature(s, prev, static, i, block):  # type: ignore[no-untyped-def]
     r = s[i]
     d = _change(r, prev[i])
     if block == 0:
@@ -91,7 +96,7 @@ def _feature(s, prev, i, block):  # type: ignore[no-untyped-def]
     if block == 1:
         return d / DELTA
     if block == 2:
-        return math.exp(-r)
+        return math.exp(-r) if r < static[i] - EXPLAINED else 0.0
     return min(d, 0.0) / DELTA * math.exp(-0.5 * r)
 
 
@@ -101,44 +106,51 @@ def feature_block(n_rays: int) -> int:
 
 
 @njit(cache=True)
-def _features_into(s, prev, shift, mirror, out):  # type: ignore[no-untyped-def]
+def _features_into(s, prev, static, shift, mirror, out):  # type: ignore[no-untyped-def]
     n = s.shape[0]
     for b in range(N_BLOCKS):
         for j in range(n):
             i = (shift - j) % n if mirror else (shift + j) % n
-            out[b * n + j] = _feature(s, prev, i, b)
+            out[b * n + j] = _feature(s, prev, static, i, b)
 
 
 def safety_features(
-    s: NDArray[np.float64], prev: NDArray[np.float64], shift: int, mirror: bool = False
+    s: NDArray[np.float64],
+    prev: NDArray[np.float64],
+    shift: int,
+    mirror: bool = False,
+    static: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
-    """The feature vector of reading ``s`` (previous reading ``prev``) turned so that ray
+    """The feature vector of reading ``s`` (previous reading ``prev``; ``static``, the
+    reading the static map alone would give, none by default) turned so that ray
     ``shift`` is ray 0 (and mirrored about it with ``mirror``)."""
+    s = np.asarray(s, np.float64)
+    st = np.full(s.shape, np.inf) if static is None else np.asarray(static, np.float64)
     out = np.empty(feature_block(s.shape[0]))
-    _features_into(np.asarray(s, np.float64), np.asarray(prev, np.float64), int(shift),
-                   bool(mirror), out)  # fmt: skip
+    _features_into(s, np.asarray(prev, np.float64), st, int(shift), bool(mirror), out)
     return out
 
 
 @njit(cache=True)
-def ring_features(s, prev, feat):  # type: ignore[no-untyped-def]
-    """The feature blocks of reading ``s`` after ``prev`` into ``feat`` (8 n_rays), each
-    block written twice, so that turning the reading is a slice (see
-    :func:`safety_of`). The values are :func:`_feature`'s, computed a ray at a time (the
-    change once, not once a block; the closeness block's exponential once for a run of
-    equal ranges; the approach block's only for a ray that came nearer: otherwise the
-    block is exactly 0)."""
+def ring_features(s, prev, static, feat):  # type: ignore[no-untyped-def]
+    """The feature blocks of reading ``s`` after ``prev`` (``static``: the static map's
+    reading, inf where unknown) into ``feat`` (8 n_rays), each block written twice, so
+    that turning the reading is a slice (see :func:`safety_of`). The values are
+    :func:`_feature`'s, computed a ray at a time (the change once, not once a block; the
+    closeness block's exponential once for a run of equal ranges; the approach block's
+    only for a ray that came nearer: otherwise the block is exactly 0)."""
     n = s.shape[0]
     last = np.nan  # the last range whose exponential was taken (rays at the sensor's
-    v2 = 0.0  # reach often repeat one value)
+    e = 0.0  # reach often repeat one value)
     for i in range(n):
         r = s[i]
         d = _change(r, prev[i])
         v0 = min(r, CAP) / CAP
         v1 = d / DELTA
         if r != last:
-            v2 = math.exp(-r)
+            e = math.exp(-r)
             last = r
+        v2 = e if r < static[i] - EXPLAINED else 0.0
         v3 = min(d, 0.0) / DELTA  # +-0 unless the ray came nearer (the sign kept)
         if d < 0.0:
             v3 = v3 * math.exp(-0.5 * r)
@@ -194,9 +206,10 @@ def safety_of(net_t, k, shift, feat, n):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
-def safety_probabilities(s, prev, net_t, n_dir, feat, out):  # type: ignore[no-untyped-def]
+def safety_probabilities(s, prev, static, net_t, n_dir, feat, out):  # type: ignore[no-untyped-def]
     """P(safe) of each of ``n_dir`` compass directions (out[:n_dir]) and of waiting
-    (out[n_dir]) for reading ``s`` after ``prev``.
+    (out[n_dir]) for reading ``s`` after ``prev`` (``static``: the static map's reading,
+    inf where unknown).
 
     ``net_t``: :func:`kernel_net` of the direction model and the wait model
     (:attr:`SafetyModel.net`), each a one-hidden-layer ReLU network. Direction d is
@@ -207,7 +220,7 @@ def safety_probabilities(s, prev, net_t, n_dir, feat, out):  # type: ignore[no-u
     products."""
     n = s.shape[0]
     per = n // n_dir
-    ring_features(s, prev, feat)
+    ring_features(s, prev, static, feat)
     for d in range(n_dir):
         out[d] = safety_of(net_t, 0, d * per, feat, n)
     out[n_dir] = safety_of(net_t, 1, 0, feat, n)
@@ -227,16 +240,27 @@ class SafetyModel:
     template's frame)."""
     template_counts: NDArray[np.float64]
     """(n_templates, n_directions): probes behind each entry."""
+    static_aware: bool = False
+    """Whether the networks were learnt with the static map's reading (their closeness
+    block then sees only the hits the static map does not explain: what moves); if not,
+    they were learnt, and are evaluated, without one."""
 
 
 @dataclass(frozen=True)
 class Probes:
     """Probe outcomes: per state, the reading, the previous one, and for each compass
-    direction and waiting (last column) whether it stayed contact-free."""
+    direction and waiting (last column) whether it was safe; and the reading the static
+    map alone gives there (what a ``map``-level agent is handed; inf: unknown)."""
 
     readings: NDArray[np.float64]
     previous: NDArray[np.float64]
     safe: NDArray[np.bool_]
+    static: NDArray[np.float64]
+
+    def __getitem__(self, rows: slice) -> Probes:
+        """The probes of states ``rows``."""
+        return Probes(self.readings[rows], self.previous[rows], self.safe[rows],
+                      self.static[rows])  # fmt: skip
 
 
 def _fork(sim: Simulator) -> Simulator:
@@ -345,7 +369,8 @@ def probe_states(
     unit = np.column_stack([np.cos(angles), np.sin(angles)])
     actions = np.vstack([unit, np.zeros((1, 2))])
     seconds = np.ascontiguousarray(np.vstack([unit, 0.5 * unit, np.zeros((1, 2))]))
-    readings, previous, safe = [], [], []
+    readings, previous, safe, statics = [], [], [], []
+    none = np.zeros((0, 2))
     for k in range(worlds):
         rng = np.random.default_rng([seed, k, 7])
         fam = families[k % len(families)]
@@ -360,6 +385,7 @@ def probe_states(
                 readings.append(sim.ranges.copy())
                 previous.append(prev)
                 safe.append(row)
+                statics.append(sensor.scan(world, sim.position, none, np.zeros(0)))
             prev = sim.ranges.copy()
             result = sim.step(walk(blocked))
             blocked = result.blocked
@@ -368,7 +394,7 @@ def probe_states(
                 prev = sim.ranges.copy()
         if progress is not None:
             progress(k + 1, worlds)
-    return Probes(np.array(readings), np.array(previous), np.array(safe))
+    return Probes(np.array(readings), np.array(previous), np.array(safe), np.array(statics))
 
 
 def _design(probes: Probes, n_directions: int) -> tuple[Any, ...]:
@@ -385,14 +411,14 @@ def _design(probes: Probes, n_directions: int) -> tuple[Any, ...]:
     y_wait = np.empty(m * 2, dtype=bool)
     row = 0
     for i in range(m):
-        s, p = probes.readings[i], probes.previous[i]
+        s, p, st = probes.readings[i], probes.previous[i], probes.static[i]
         for d in range(n_directions):
             for mirror in (False, True):
-                _features_into(s, p, d * per, mirror, x_dir[row])
+                _features_into(s, p, st, d * per, mirror, x_dir[row])
                 y_dir[row] = probes.safe[i, d]
                 row += 1
         for j, mirror in enumerate((False, True)):
-            _features_into(s, p, 0, mirror, x_wait[2 * i + j])
+            _features_into(s, p, st, 0, mirror, x_wait[2 * i + j])
             y_wait[2 * i + j] = probes.safe[i, n_directions]
     return x_dir, y_dir, x_wait, y_wait
 
@@ -463,16 +489,20 @@ def learn_safety(
     n_templates: int,
     *,
     seed: int = 0,
+    static_aware: bool = False,
 ) -> tuple[SafetyModel, dict[str, float]]:
     """Fit the safety model and the per-template priors; returns them and statistics
-    (probes, safe share, held-out AUC of each, the last fifth of the states held out)."""
+    (probes, safe share, held-out AUC of each, the last fifth of the states held out).
+    With ``static_aware`` the networks see the probes' static readings (a ``map``-level
+    agent's); otherwise none."""
     from sklearn.metrics import roc_auc_score
 
+    if not static_aware:
+        probes = dataclasses.replace(probes, static=np.full(probes.readings.shape, np.inf))
     n_dir = n_directions
     m = len(probes.readings)
     cut = max(1, int(0.8 * m))
-    train = Probes(probes.readings[:cut], probes.previous[:cut], probes.safe[:cut])
-    test = Probes(probes.readings[cut:], probes.previous[cut:], probes.safe[cut:])
+    train, test = probes[:cut], probes[cut:]
     xd, yd, xw, yw = _design(train, n_dir)
     w_dir, w_wait = _fit(xd, yd, seed), _fit(xw, yw, seed)
     stats: dict[str, float] = {
@@ -496,5 +526,5 @@ def learn_safety(
         stats["template_heldout_auc"] = float(
             roc_auc_score(probes.safe[cut:, :n_dir].ravel(), prior.ravel())
         )
-    model = SafetyModel(np.stack([w_dir, w_wait]), safe_t, counts)
+    model = SafetyModel(np.stack([w_dir, w_wait]), safe_t, counts, static_aware)
     return model, stats

@@ -433,7 +433,7 @@ def compass_table(n_dir: int) -> np.ndarray:
 def decide_learnt(  # type: ignore[no-untyped-def]
     s, prev, static, nodes_t, node_prior, net, wx, wy, reach, guard, alpha, beta, wait,
     cos, sin, max_range, compass, feat, p, out, node_landmark, prev_landmark, keep, persist,
-    lazy=True,
+    lazy=True, static_aware=False,
 ):
     """One decision of the ``learnt`` preset: every compass direction (and, with
     ``wait``, standing still) scored by the global direction and the learnt safety
@@ -456,7 +456,11 @@ def decide_learnt(  # type: ignore[no-untyped-def]
 
     Persistence (an option in the paper's sense, §V): while the reading stays within
     the landmark of the previous decision (``node_landmark[node] == prev_landmark``),
-    direction ``keep`` (the previous choice) scores ``persist`` more."""
+    direction ``keep`` (the previous choice) scores ``persist`` more.
+
+    ``static_aware``: the networks were learnt with the static reading (their closeness
+    block sees only hits the static map does not explain); otherwise they are handed
+    none, as they learnt (the guard uses ``static`` either way)."""
     for d in range(p.shape[0]):
         p[d] = np.nan
     if not _learnt_inputs(s, prev, static, out):
@@ -466,7 +470,7 @@ def decide_learnt(  # type: ignore[no-untyped-def]
     _learnt_choose(
         s, prev, static, node, d2, node_prior, net, wx, wy, reach, guard, alpha, beta, wait,
         cos, sin, max_range, compass, feat, p, out, lazy, k, persist,
-        _work(s.shape[0], node_prior.shape[1]),
+        _work(s.shape[0], node_prior.shape[1]), static_aware,
     )  # fmt: skip
 
 
@@ -487,7 +491,7 @@ def _learnt_inputs(s, prev, static, out):  # type: ignore[no-untyped-def]
 @njit(cache=True)
 def decide_learnt_batch(  # type: ignore[no-untyped-def]
     s, prev, static, nodes_t, gram, sq, node_prior, net, want, reach, guard, alpha, beta,
-    wait, cos, sin, max_range, compass, feat, p, out,
+    wait, cos, sin, max_range, compass, feat, p, out, static_aware=False,
 ):
     """:func:`decide_learnt` for each row (lazy), out of shape (b, 5), with the
     nearest-node search screened as :func:`decide_batch` screens it."""
@@ -500,26 +504,29 @@ def decide_learnt_batch(  # type: ignore[no-untyped-def]
         _learnt_choose(
             x, prev[b], static[b], node, bd, node_prior, net, want[b, 0], want[b, 1],
             reach[b], guard, alpha, beta, wait, cos, sin, max_range, compass, feat, p, out[b],
-            True, -1, 0.0, work,
+            True, -1, 0.0, work, static_aware,
         )  # fmt: skip
 
 
 @njit(cache=True, inline="always")
 def _work(n, n_dir):  # type: ignore[no-untyped-def]
     """Scratch of :func:`_learnt_choose` for ``n`` rays and ``n_dir`` directions (one
-    allocation, made once a batch)."""
-    return np.empty((4, max(n, n_dir)))
+    allocation, made once a batch); its last row, no static reading (inf)."""
+    work = np.empty((5, max(n, n_dir)))
+    work[4] = np.inf
+    return work
 
 
 @njit(cache=True)
 def _learnt_choose(  # type: ignore[no-untyped-def]
     s, prev, static, node, d2, node_prior, net, wx, wy, reach, guard, alpha, beta, wait,
-    cos, sin, max_range, compass, feat, p, out, lazy, keep, persist, work,
+    cos, sin, max_range, compass, feat, p, out, lazy, keep, persist, work, static_aware,
 ):
     """The choice of :func:`decide_learnt` once the reading is recognised (node, d2),
     direction ``keep`` (-1: none) scoring ``persist`` more; ``compass`` (n_dir, 2) holds
     each direction's (cos, sin) of 2 pi d / n_dir (:func:`compass_table`); ``work`` is
     scratch (:func:`_work`)."""
+    seen = static if static_aware else work[4, : s.shape[0]]  # the networks' static
     n_dir = node_prior.shape[1]
     out[0] = 0.0
     out[1] = 0.0
@@ -535,7 +542,7 @@ def _learnt_choose(  # type: ignore[no-untyped-def]
     per = n // n_dir
     all_p = wait or not lazy
     if all_p:
-        safety_probabilities(s, prev, net, n_dir, feat, p)
+        safety_probabilities(s, prev, seen, net, n_dir, feat, p)
     rung = all_p  # the ring's features, computed when the network first needs them
     now = np.inf
     hit = np.inf  # the nearest hit, and the nearest the static map does not explain
@@ -603,7 +610,7 @@ def _learnt_choose(  # type: ignore[no-untyped-def]
             continue
         if not all_p:
             if not rung:
-                ring_features(s, prev, feat)
+                ring_features(s, prev, seen, feat)
                 rung = True
             p[d] = safety_of(net, 0, d * per, feat, n)
         score = top + alpha * math.log(max(p[d], 1e-9))

@@ -167,7 +167,7 @@ class LearntAgent(Agent):
             s, prev, static, self._nodes_t, self._prior, self._net, desired[0], desired[1],
             reach, self.guard, self.alpha, self.beta, self.wait, self._cos, self._sin,
             self.max_range, self._compass, self._feat, self._p, out, self._landmarks,
-            self._prev_landmark, self._keep, self.persist,
+            self._prev_landmark, self._keep, self.persist, True, self.model.static_aware,
         )  # fmt: skip
         if out[2] < 0:
             what = "not finite and >= 0" if out[2] == -1 else "static reading not >= 0"
@@ -246,6 +246,7 @@ class LearntAgent(Agent):
             s, prev, st, self._nodes_t, self._gram, sq, self._prior, self._net,
             want, np.ascontiguousarray(r), self.guard, self.alpha, self.beta, self.wait,
             self._cos, self._sin, self.max_range, self._compass, self._feat, self._p, out,
+            self.model.static_aware,
         )  # fmt: skip
         if (out[:, 2] == -1).any():
             raise InvalidArgumentError("readings must be finite and >= 0 (and previous finite)")

@@ -77,7 +77,7 @@ def main() -> bool:
             _kernels.decide_learnt(
                 readings[k], readings[k - 1], static, *args, want[k, 0], want[k, 1], 5.0,
                 a.guard, a.alpha, a.beta, a.wait, a._cos, a._sin, 10.0, a._compass, feat, p, out,
-                a._landmarks, -1, -1, 0.0,
+                a._landmarks, -1, -1, 0.0, True, a.model.static_aware,
             )  # fmt: skip
 
         decide()

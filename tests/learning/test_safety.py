@@ -308,7 +308,7 @@ def test_a_policy_lasts_while_the_reading_stays_within_its_landmark(learnt) -> N
         _kernels.decide_learnt(
             s, s, np.full(32, np.inf), agent._nodes_t, agent._prior, agent._net, aim[0], aim[1],
             5.0, 1.05, 2.0, 0.0, False, agent._cos, agent._sin, 10.0, agent._compass, np.empty(256), p, out,
-            agent._landmarks, prev_landmark, keep, persist,
+            agent._landmarks, prev_landmark, keep, persist, True, False,
         )  # fmt: skip
         return int(out[4])
 

@@ -433,7 +433,7 @@ def compass_table(n_dir: int) -> np.ndarray:
 def decide_learnt(  # type: ignore[no-untyped-def]
     s, prev, static, nodes_t, node_prior, net, wx, wy, reach, guard, alpha, beta, wait,
     cos, sin, max_range, compass, feat, p, out, node_landmark, prev_landmark, keep, persist,
-    lazy=True, static_aware=False,
+    lazy, static_aware,
 ):
     """One decision of the ``learnt`` preset: every compass direction (and, with
     ``wait``, standing still) scored by the global direction and the learnt safety
@@ -491,7 +491,7 @@ def _learnt_inputs(s, prev, static, out):  # type: ignore[no-untyped-def]
 @njit(cache=True)
 def decide_learnt_batch(  # type: ignore[no-untyped-def]
     s, prev, static, nodes_t, gram, sq, node_prior, net, want, reach, guard, alpha, beta,
-    wait, cos, sin, max_range, compass, feat, p, out, static_aware=False,
+    wait, cos, sin, max_range, compass, feat, p, out, static_aware,
 ):
     """:func:`decide_learnt` for each row (lazy), out of shape (b, 5), with the
     nearest-node search screened as :func:`decide_batch` screens it."""

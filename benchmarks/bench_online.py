@@ -116,12 +116,25 @@ def main() -> bool:
             per=1000,
         )
     )
+    # the registered preset's choice uses no context (beta 0): the same actions without
+    # recognising any
+    rows.append(
+        Timing(
+            "learnt preset: decide_batch, 1000 agents, recognise=False",
+            median_time(
+                lambda: agent.decide_batch(batch, prev_batch, want[:1000], 5.0, static_batch,
+                                           recognise=False),  # fmt: skip
+                number=20,
+            ),
+            per=1000,
+        )
+    )
     ok = report(
         "online decision (scan excluded)",
         rows,
         None,
         {rows[0].name: 10e-6, rows[1].name: 10e-6, rows[2].name: 3e-6, rows[3].name: 10e-6,
-         rows[5].name: 3e-6},
+         rows[5].name: 3e-6, rows[6].name: 3e-6},
     )
     cfg = NavigationConfig(str(caps_path), worlds=400, method="copi-extended", guard=1.2)
     walls = {}

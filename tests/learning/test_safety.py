@@ -286,6 +286,12 @@ def test_a_batch_decides_as_one_agent_at_a_time(learnt) -> None:
             )  # fmt: skip
             assert np.array_equal(actions[i], out[:2]) and nodes[i] == out[2]
         assert np.array_equal(actions[7], [0.0, 0.0])
+    with pytest.raises(InvalidArgumentError, match="recognise=False needs beta = 0"):
+        agent.decide_batch(s, prev, want, reach, static, recognise=False)
+    agent.beta = 0.0  # the choice uses no context: the same actions without recognising
+    actions, nodes = agent.decide_batch(s, prev, want, reach, static)
+    fast, none = agent.decide_batch(s, prev, want, reach, static, recognise=False)
+    assert np.array_equal(fast, actions) and (none == -1).all() and (nodes >= 0).all()
     with pytest.raises(InvalidArgumentError, match="previous readings must have shape"):
         agent.decide_batch(s, prev[:3], want)
     bad = s.copy()

@@ -491,16 +491,20 @@ def _learnt_inputs(s, prev, static, out):  # type: ignore[no-untyped-def]
 @njit(cache=True)
 def decide_learnt_batch(  # type: ignore[no-untyped-def]
     s, prev, static, nodes_t, gram, sq, node_prior, net, want, reach, guard, alpha, beta,
-    wait, cos, sin, max_range, compass, feat, p, out, static_aware,
+    wait, cos, sin, max_range, compass, feat, p, out, static_aware, recognise,
 ):
     """:func:`decide_learnt` for each row (lazy), out of shape (b, 5), with the
-    nearest-node search screened as :func:`decide_batch` screens it."""
+    nearest-node search screened as :func:`decide_batch` screens it; without
+    ``recognise`` (only when ``beta`` is 0, so that the choice does not use the context)
+    no search: node -3 (-1 and -2 are the input errors), distance NaN."""
     work = _work(s.shape[1], node_prior.shape[1])
     for b in range(s.shape[0]):
         x = s[b]
         if not _learnt_inputs(x, prev[b], static[b], out[b]):
             continue
-        node, bd = _screened_nearest_context(x, prev[b], gram[b], sq[b], nodes_t)
+        node, bd = -3, np.nan
+        if recognise:
+            node, bd = _screened_nearest_context(x, prev[b], gram[b], sq[b], nodes_t)
         _learnt_choose(
             x, prev[b], static[b], node, bd, node_prior, net, want[b, 0], want[b, 1],
             reach[b], guard, alpha, beta, wait, cos, sin, max_range, compass, feat, p, out[b],

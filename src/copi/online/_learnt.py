@@ -198,6 +198,8 @@ class LearntAgent(Agent):
         desired: Any,
         reach: Any = None,
         static: Any = None,
+        *,
+        recognise: bool = True,
     ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
         """Velocities for many agents at once: row i is the decision :meth:`act` makes
         for reading ``ranges[i]`` after ``previous[i]``, with the global direction
@@ -206,8 +208,10 @@ class LearntAgent(Agent):
         without persistence (a batch has no previous decision); not to be called from
         several threads on one agent at once (the screen's buffer is reused). The
         nearest-node search is screened by one float32 matrix product (see
-        :func:`copi.online._controller.screen_products`). Returns
-        (actions (b, 2), nodes (b,))."""
+        :func:`copi.online._controller.screen_products`). With ``recognise=False`` (only
+        when ``beta`` is 0: the choice then uses no context) the contexts are not
+        recognised at all, the same actions come back, and every node is -1; about 40 %
+        faster (the speed page). Returns (actions (b, 2), nodes (b,))."""
         n = self.capabilities.n_rays
         s = np.ascontiguousarray(np.asarray(ranges, dtype=np.float64))
         if s.ndim != 2 or s.shape[1] != n:
@@ -237,22 +241,32 @@ class LearntAgent(Agent):
             raise InvalidArgumentError(
                 f"static readings must have shape {s.shape}; got {st.shape}"
             )
-        if self._screen is None:  # first use, or the nodes have grown or moved
-            self._screen = screen_nodes(self._nodes)
-        q = np.ascontiguousarray(self.capabilities.contexts(s, prev))
-        self._gram, sq = screen_products(q, self._screen, self._gram)
+        if not recognise and self.beta > 0.0:
+            raise InvalidArgumentError(
+                f"recognise=False needs beta = 0 (the choice then uses no context); "
+                f"beta is {self.beta:g}"
+            )
+        if recognise:
+            if self._screen is None:  # first use, or the nodes have grown or moved
+                self._screen = screen_nodes(self._nodes)
+            q = np.ascontiguousarray(self.capabilities.contexts(s, prev))
+            self._gram, sq = screen_products(q, self._screen, self._gram)
+            gram = self._gram
+        else:
+            gram, sq = np.empty((b, 0), dtype=np.float32), np.zeros(b)
         out = np.empty((b, 5))
         _kernels.decide_learnt_batch(
-            s, prev, st, self._nodes_t, self._gram, sq, self._prior, self._net,
+            s, prev, st, self._nodes_t, gram, sq, self._prior, self._net,
             want, np.ascontiguousarray(r), self.guard, self.alpha, self.beta, self.wait,
             self._cos, self._sin, self.max_range, self._compass, self._feat, self._p, out,
-            self.model.static_aware,
+            self.model.static_aware, recognise,
         )  # fmt: skip
         if (out[:, 2] == -1).any():
             raise InvalidArgumentError("readings must be finite and >= 0 (and previous finite)")
         if (out[:, 2] == -2).any():
             raise InvalidArgumentError("static readings must be >= 0")
-        return out[:, :2].copy(), out[:, 2].astype(np.int64)
+        nodes = out[:, 2].astype(np.int64) if recognise else np.full(b, -1, dtype=np.int64)
+        return out[:, :2].copy(), nodes
 
     def _grow(self, s: NDArray[np.float64]) -> None:
         """Learn an unfamiliar context into the grown part of the context map."""

@@ -13,7 +13,7 @@ import math
 import numpy as np
 from numba import njit
 
-from copi.learning._safety import ring_features, safety_of, safety_probabilities
+from copi.learning._safety import EXPLAINED, ring_features, safety_of, safety_probabilities
 
 # No fastmath anywhere here: every sum runs in the order written, so that a decision is
 # the same on every processor (reassociation lets LLVM pick the summation order of the
@@ -122,7 +122,7 @@ def _hits(s, static, cos, sin, max_range, hits):  # type: ignore[no-untyped-def]
             continue
         px = s[i] * cos[i]
         py = s[i] * sin[i]
-        if s[i] >= static[i] - 0.05:  # explained by the static map: a wall
+        if s[i] >= static[i] - EXPLAINED:  # explained by the static map: a wall
             k0 -= 1
             hits[0, k0] = px
             hits[1, k0] = py
@@ -556,7 +556,7 @@ def _learnt_choose(  # type: ignore[no-untyped-def]
             now = s[i]
         if s[i] < max_range:
             hit = min(hit, s[i])
-            if s[i] < static[i] - 0.05:
+            if s[i] < static[i] - EXPLAINED:
                 moving = min(moving, s[i])
     wall = min(_WALL, now - 1e-6)
     roomy = min(0.35, now - 1e-6)

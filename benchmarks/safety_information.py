@@ -13,7 +13,11 @@ copi's choice with either in its hands.
    drawn from the true present with the true motion model (the simulator forked, its
    random generator reseeded), in which the direction's probe is safe. Printed: the
    held-out AUC of the network's P(safe) and of the oracle's probability against the
-   labels.
+   labels. With ``--decompose``, the oracle's probability again with less knowledge
+   (the same futures): only the discs some ray sees (``visible``), their headings
+   unknown (drawn uniformly: ``no headings``), their headings known to within one
+   step's turn (the true heading plus a draw of the walk's turn: ``headings within a
+   turn``).
 2. **Choice.** One choice rule (copi-learnt's scoring, simplified: cos(d, aim) + alpha
    log P over the guard's admitted directions, the most probably safe direction when
    the guard admits none) with P from the network or from the oracle's futures, on the
@@ -57,39 +61,74 @@ def _moves() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return unit, actions, seconds
 
 
-def _oracle_p(sim: Any, key: tuple[int, int], futures: int) -> np.ndarray:
+KNOWLEDGE = ("visible", "no headings", "headings within a turn")
+"""The oracle's knowledge taken apart (``--decompose``; see the module's docstring)."""
+
+
+def _oracle_p(
+    sim: Any, key: tuple[int, int], futures: int, keep: np.ndarray | None = None,
+    headings: str = "true",
+) -> np.ndarray:
     """Each action's share of ``futures`` futures (drawn from ``sim``'s present with the
-    true motion model) in which its escape probe is safe."""
+    true motion model) in which its escape probe is safe; with ``keep``, only those
+    discs, and their headings the true ones (``"true"``), unknown (``"none"``: drawn
+    uniformly) or known to within one step's turn (``"turn"``)."""
     from copi.learning._safety import _fork, _probe_row
 
     _, actions, seconds = _moves()
     acc = np.zeros(len(actions))
     for j in range(futures):
         f = _fork(sim)
+        if keep is not None:
+            f.centers = f.centers[keep].copy()
+            f.radii = np.ascontiguousarray(f.radii[keep])
+            f.headings = f.headings[keep].copy()
         f.rng = np.random.default_rng([*key, j])
+        if headings == "none":
+            f.headings = f.rng.uniform(0, 2 * np.pi, len(f.radii))
+        elif headings == "turn":
+            f.headings = f.headings + f.rng.normal(0, sim.turn_sd, len(f.radii))
         acc += _probe_row(f, actions, 3, "escape", seconds)
     return acc / futures
 
 
-def _visit(args: tuple[str, int, int, float, float, int]) -> dict[str, Any]:
+def _visible(sim: Any) -> np.ndarray:
+    """Which discs some ray of the agent's reading sees (the reading changes without it)."""
+    base = sim.sensor.scan(sim.world, sim.position, sim.centers, sim.radii)
+    seen = np.zeros(len(sim.radii), dtype=bool)
+    for d in range(len(sim.radii)):
+        m = np.arange(len(sim.radii)) != d
+        seen[d] = not np.array_equal(
+            base, sim.sensor.scan(sim.world, sim.position, sim.centers[m], sim.radii[m])
+        )
+    return seen
+
+
+def _visit(args: tuple[str, int, int, float, float, int, bool]) -> dict[str, Any]:
     """copi-learnt through one episode, each decision's state probed."""
     from copi.experiments import make_agent, run_episode
     from copi.experiments.navigation import draw_episode
     from copi.learning._safety import _probe_row
 
-    caps_path, k, seed, alpha, guard, futures = args
+    caps_path, k, seed, alpha, guard, futures, decompose = args
     caps = _setup(caps_path)
     sim = draw_episode("crowd", k, seed)
     agent = make_agent("copi-learnt", caps, alpha=alpha, guard=guard)
     _, actions, seconds = _moves()
     rows: dict[str, list[Any]] = {"s": [], "static": [], "label": [], "oracle": []}
+    rows.update({name: [] for name in KNOWLEDGE})
     act = agent.act
 
     def probing(obs: Any) -> Any:
         rows["s"].append(obs.ranges.copy())
         rows["static"].append(obs.static.copy())
         rows["label"].append(_probe_row(sim, actions, 3, "escape", seconds))
-        rows["oracle"].append(_oracle_p(sim, (k, len(rows["s"])), futures))
+        key = (k, len(rows["s"]))
+        rows["oracle"].append(_oracle_p(sim, key, futures))
+        if decompose:
+            seen = _visible(sim)
+            for name, headings in zip(KNOWLEDGE, ("true", "none", "turn"), strict=True):
+                rows[name].append(_oracle_p(sim, key, futures, seen, headings))
         return act(obs)
 
     agent.act = probing  # type: ignore[method-assign]
@@ -150,6 +189,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--guard", type=float, default=1.05)
     ap.add_argument("--futures", type=int, default=32)
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--decompose", action="store_true",
+                    help="the oracle's probability again with less knowledge")
+    ap.add_argument("--skip-choice", action="store_true", help="the visited states only")
     ap.add_argument("--out", type=Path, default=None)
     a = ap.parse_args(argv)
     from sklearn.metrics import roc_auc_score
@@ -161,8 +203,8 @@ def main(argv: list[str] | None = None) -> int:
                               "alpha": a.alpha, "guard": a.guard, "futures": a.futures}  # fmt: skip
     t0 = time.perf_counter()
     with ProcessPoolExecutor(a.workers) as ex:
-        visits = list(ex.map(_visit, [(a.caps, k, a.visit_seed, a.alpha, a.guard, a.futures)
-                                      for k in range(a.episodes)]))  # fmt: skip
+        visits = list(ex.map(_visit, [(a.caps, k, a.visit_seed, a.alpha, a.guard, a.futures,
+                                       a.decompose) for k in range(a.episodes)]))  # fmt: skip
     s = np.concatenate([v["s"] for v in visits])
     prev = np.concatenate([np.vstack([v["s"][:1], v["s"][:-1]]) for v in visits])
     static = np.concatenate([v["static"] for v in visits])
@@ -180,7 +222,13 @@ def main(argv: list[str] | None = None) -> int:
                   visit_seconds=time.perf_counter() - t0)  # fmt: skip
     print(f"{len(s)} visited states (crowd, seed {a.visit_seed}), safe share "
           f"{label[:, :16].mean():.3f}: AUC network {net_auc}, oracle {oracle_auc}")
-    for guard in (a.guard, 0.0):
+    if a.decompose:
+        for name in KNOWLEDGE:
+            p = np.concatenate([v[name] for v in visits])
+            auc = float(roc_auc_score(label[:, :16].ravel(), p[:, :16].ravel())) if both else None
+            result[f"oracle_auc_{name.replace(' ', '_')}"] = auc
+            print(f"  oracle, {name}: AUC {auc}")
+    for guard in () if a.skip_choice else (a.guard, 0.0):
         for source in ("network", "oracle"):
             with ProcessPoolExecutor(a.workers) as ex:
                 ok = list(ex.map(_choose, [(a.caps, k, a.seed, source, a.alpha, guard, a.futures)

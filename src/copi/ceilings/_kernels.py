@@ -387,6 +387,40 @@ def window(ok, mid_ok, terminal, goal, i0, j0, n):  # type: ignore[no-untyped-de
     return w_ok, w_mid, w_term, w_goal
 
 
+@njit(cache=True, inline="always")
+def free_moves(qx, qy, r, segs, moves, free, room):  # type: ignore[no-untyped-def]
+    """``free[c]``: whether the walls ``segs`` let an agent of radius ``r`` at (qx, qy)
+    make move ``moves[c]`` whole with ``room`` to spare (waiting always)."""
+    for c in range(moves.shape[0]):
+        ex = moves[c, 0]
+        ey = moves[c, 1]
+        le = math.sqrt(ex * ex + ey * ey)
+        free[c] = le == 0.0 or _sweep_one(qx, qy, ex / le, ey / le, segs, r) >= le + room
+
+
+@njit(cache=True, inline="always")
+def escapes(qx, qy, r, moves, free, c1, c2, radii, near, n_near, clear):  # type: ignore[no-untyped-def]
+    """Whether some move ``moves[c]`` with ``free[c]`` (:func:`free_moves`) passes every
+    disc ``near[:n_near]``, moving linearly from ``c1`` to ``c2`` (radii ``radii``), with
+    ``clear`` to spare: the escape :func:`escape_move` asks of a first move's end."""
+    for c in range(moves.shape[0]):
+        if not free[c]:
+            continue
+        ok = True
+        for a in range(n_near):
+            k = near[a]
+            cx = c1[k, 0]
+            cy = c1[k, 1]
+            gap = _closest_approach(qx, qy, moves[c, 0], moves[c, 1], cx, cy, c2[k, 0] - cx,
+                                    c2[k, 1] - cy)  # fmt: skip
+            if gap - r - radii[k] < clear:
+                ok = False
+                break
+        if ok:
+            return True
+    return False
+
+
 @njit(cache=True)
 def escape_move(  # type: ignore[no-untyped-def]
     px, py, gx, gy, tol, r, segs, samples, radii, moves, margin, escape_margin, V, x0, y0,
@@ -425,12 +459,7 @@ def escape_move(  # type: ignore[no-untyped-def]
         qx = px + dx
         qy = py + dy
         done = math.sqrt((qx - gx) ** 2 + (qy - gy) ** 2) <= tol - MARGIN
-        # second moves a wall lets through from q
-        for c in range(n_m):
-            ex = moves[c, 0]
-            ey = moves[c, 1]
-            le = math.sqrt(ex * ex + ey * ey)
-            free2[c] = le == 0.0 or _sweep_one(qx, qy, ex / le, ey / le, local, r) >= le + MARGIN
+        free_moves(qx, qy, r, local, moves, free2, MARGIN)  # second moves walls let through
         lost = 0
         hits = 0
         for s in range(n_s):
@@ -450,25 +479,8 @@ def escape_move(  # type: ignore[no-untyped-def]
                 continue
             if done:
                 continue
-            escape = False
-            for c in range(n_m):
-                if not free2[c]:
-                    continue
-                ok = True
-                for a in range(n_near):
-                    k = near[a]
-                    cx = samples[s, 1, k, 0]
-                    cy = samples[s, 1, k, 1]
-                    gap = _closest_approach(qx, qy, moves[c, 0], moves[c, 1], cx, cy,
-                                            samples[s, 2, k, 0] - cx,
-                                            samples[s, 2, k, 1] - cy)  # fmt: skip
-                    if gap - r - radii[k] < margin + escape_margin:
-                        ok = False
-                        break
-                if ok:
-                    escape = True
-                    break
-            if not escape:
+            if not escapes(qx, qy, r, moves, free2, samples[s, 1], samples[s, 2], radii, near,
+                           n_near, margin + escape_margin):  # fmt: skip
                 lost += 1
         cost = loss * lost / n_s + 1.0
         if not done:

@@ -48,8 +48,8 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
+from copi.ceilings._kernels import escapes, free_moves, local_segments
 from copi.errors import InvalidArgumentError
-from copi.geometry._kernels import _closest_approach, _sweep_one
 from copi.learning._mlp import fit_mlp
 from copi.learning._policies import compass
 from copi.world import RandomWalk, RangeSensor, Simulator, random_world, sample_world
@@ -291,28 +291,22 @@ ESCAPE_CLEAR = 0.2
 step: the model-oracle's margin and escape margin (0.1 + 0.1)."""
 
 
+WALL_ROOM = 1e-9
+"""A second move counts as free of walls when it stops no nearer than this to its end."""
+
+
 @njit(cache=True)
 def second_move_clear(qx, qy, r, segs, c1, c2, radii, moves, clear):  # type: ignore[no-untyped-def]
     """Whether an agent of radius ``r`` at (qx, qy) has a move among ``moves`` (velocities,
     one step) that no wall (``segs``) stops short and that passes every obstacle moving
-    linearly from ``c1`` to ``c2`` (radii ``radii``) with ``clear`` to spare (the
-    simulator's closest-approach test)."""
-    for m in range(moves.shape[0]):
-        dx = moves[m, 0]
-        dy = moves[m, 1]
-        le = math.sqrt(dx * dx + dy * dy)
-        if le > 0.0 and _sweep_one(qx, qy, dx / le, dy / le, segs, r) < le + 1e-9:
-            continue
-        ok = True
-        for k in range(c1.shape[0]):
-            gap = _closest_approach(qx, qy, dx, dy, c1[k, 0], c1[k, 1], c2[k, 0] - c1[k, 0],
-                                    c2[k, 1] - c1[k, 1])  # fmt: skip
-            if gap - r - radii[k] < clear:
-                ok = False
-                break
-        if ok:
-            return True
-    return False
+    linearly from ``c1`` to ``c2`` (radii ``radii``) with ``clear`` to spare: the
+    model-oracle's own test (:func:`copi.ceilings._kernels.escapes`) on one future, with
+    :data:`WALL_ROOM` to spare from walls where the oracle keeps 1e-6."""
+    free = np.empty(moves.shape[0], dtype=np.bool_)
+    local = local_segments(qx, qy, segs, 1.0 + r + 1e-3)  # a move is at most 1 long
+    free_moves(qx, qy, r, local, moves, free, WALL_ROOM)
+    return escapes(qx, qy, r, moves, free, c1, c2, radii, np.arange(c1.shape[0]),
+                   c1.shape[0], clear)  # fmt: skip
 
 
 def _probe_row(sim: Simulator, actions: NDArray[np.float64], horizon: int, label: str,

@@ -4,12 +4,13 @@ model-predictive oracle beside every method, on the same episodes.
     python benchmarks/ceilings.py --bench results/ceilings --episodes 200 \\
         --oracle-episodes 200 --out docs/ceilings.md
 
-Runs ``copi benchmark`` twice into one directory (resumable): every default method and
-``clairvoyant`` on ``--episodes`` episodes per family, then ``model-oracle`` (1-3 s an
-episode) on the first ``--oracle-episodes``; the report pairs each row on the episodes
-both ran. Writes a summary: per family and level, the share solvable at all (the
-clairvoyant), the oracle, the best method and copi-learnt, the gap from each to the
-bound, and the oracle against each method (paired, 95 % intervals).
+Runs ``copi benchmark`` three times into one directory (resumable): every default method
+and ``clairvoyant`` on ``--episodes`` episodes per family, then ``model-oracle`` (1-3 s
+an episode), then ``tracked-mpc`` (its planner at level map) on the first
+``--oracle-episodes``; the report pairs each row on the episodes both ran. Writes a
+summary: per family and level, the share solvable at all (the clairvoyant), the oracle,
+the best method and copi-learnt, the gap from each to the bound, and the oracle against
+each method (paired, 95 % intervals).
 """
 
 from __future__ import annotations
@@ -60,7 +61,8 @@ def main() -> None:
     # wall times of the runs that did the work (a rerun that only resumes keeps them)
     measured = {}
     for key, eps, ms in (("methods", a.episodes, methods),
-                         ("oracle", a.oracle_episodes, ["model-oracle"])):  # fmt: skip
+                         ("oracle", a.oracle_episodes, ["model-oracle"]),
+                         ("tracked", a.oracle_episodes, ["tracked-mpc"])):  # fmt: skip
         t0 = time.perf_counter()
         _bench(bench, eps, ms, a.workers)
         took = time.perf_counter() - t0
@@ -76,13 +78,16 @@ def main() -> None:
         f"--oracle-episodes {a.oracle_episodes}` (benchmark seed 0; "
         f"{timing['methods']['seconds'] / 60:.0f} min for the methods and the clairvoyant, "
         f"{timing['oracle']['seconds'] / 60:.0f} min for the oracle, "
+        f"{timing['tracked']['seconds'] / 60:.0f} min for tracked-mpc, "
         f"{timing['oracle']['workers']} worker(s)). *clairvoyant* knows the obstacles' "
         "whole future (they ignore the agent, "
         "so it can be recorded) and replays its space-time plan through the simulator: the "
         "share of episodes solvable at all. *model-oracle* knows the present (positions and "
         "velocities) and the obstacles' motion model (their random walk's true parameters), "
         "not the future: the best to expect of an agent that cannot see ahead. Both are "
-        "bounds, not methods. Each row over the first "
+        "bounds, not methods. *tracked-mpc* is a method: the oracle's planner at level map, "
+        "on the discs it makes out in its reading and a motion model estimated from its "
+        "own tracks. Each row over the first "
         f"{a.oracle_episodes} episodes of a family (those the oracle ran), so that every "
         "cell is paired; Δ in points with 95 % bootstrap intervals.",
         "",

@@ -128,7 +128,7 @@ def test_the_motion_model_is_the_simulators() -> None:
         o = ModelOracle()
         o.reset(make_task(sim, "oracle"))
         mine = sample_futures(obst, o.segs, 2000, 3, TURN_SD, 4, 7, o.clear, o.field.x0,
-                              o.field.y0, o.fine)  # fmt: skip
+                              o.field.y0, o.fine, 0.0)  # fmt: skip
         theirs = np.empty((2000, 3, 2))
         for s in range(2000):
             twin = copy.deepcopy(sim)

@@ -13,6 +13,8 @@ name                level     what it is
 ``tangent-bug``     sensor    TangentBug on the ranges
 ``ppo``             sensor    a local policy learnt by PPO, run in numpy (``ppo-guard``:
                               shielded by compass-guard's guard)
+``tracked-mpc``     map       the model-oracle's planner on the discs it tracks in its
+                              reading, their motion estimated from its own tracks
 ``replan``          oracle    shortest path on the current snapshot, re-planned
 ``navground-hrvo``  oracle    navground's HRVO (optional extra ``peers``)
 ``navground-hl``    oracle    navground's HL (optional extra ``peers``)
@@ -44,11 +46,13 @@ from copi.baselines._ppo import (
 from copi.baselines._replan import Replan
 from copi.baselines._simple import CompassGuard, Straight
 from copi.baselines._tangent_bug import TangentBug
+from copi.baselines._tracked import DiscTracker, TrackedMPC
 from copi.baselines._vfh import VFH
 
 __all__ = [
     "CompassGuard",
     "DWA",
+    "DiscTracker",
     "NAVGROUND_BEHAVIORS",
     "NavgroundAgent",
     "NavgroundMissingError",
@@ -58,6 +62,7 @@ __all__ = [
     "Replan",
     "Straight",
     "TangentBug",
+    "TrackedMPC",
     "VFH",
     "features",
     "load_policy",

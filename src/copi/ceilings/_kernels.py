@@ -159,13 +159,14 @@ def spacetime_astar(  # type: ignore[no-untyped-def]
 
 @njit(cache=True)
 def sample_futures(  # type: ignore[no-untyped-def]
-    obstacles, segs, n_samples, horizon, turn_sd, retries, seed, clear, cx0, cy0, ch
+    obstacles, segs, n_samples, horizon, turn_sd, retries, seed, clear, cx0, cy0, ch, fallback
 ):
     """``n_samples`` futures of the discs' random walk over ``horizon`` steps, drawn with
     the simulator's own rule (:func:`copi.geometry._kernels.step_world`): each step the
     heading turns by N(0, ``turn_sd``); a move that would touch a wall tries ``retries``
     uniform headings, else the disc waits. A disc's heading and speed are those of its
-    observed velocity (a disc seen waiting: a uniform heading, the others' speed).
+    observed velocity (a disc seen waiting: a uniform heading at ``fallback``, or at the
+    others' greatest speed when ``fallback`` <= 0).
 
     ``obstacles`` rows (x, y, vx, vy, radius); ``clear``: the distance to the walls on a
     grid (origin cx0, cy0, side ch), which spares the swept test of a move that cannot
@@ -176,9 +177,10 @@ def sample_futures(  # type: ignore[no-untyped-def]
     np.random.seed(seed)
     d = obstacles.shape[0]
     out = np.empty((n_samples, horizon + 1, d, 2))
-    fallback = 0.0
-    for k in range(d):
-        fallback = max(fallback, math.sqrt(obstacles[k, 2] ** 2 + obstacles[k, 3] ** 2))
+    if fallback <= 0.0:
+        fallback = 0.0
+        for k in range(d):
+            fallback = max(fallback, math.sqrt(obstacles[k, 2] ** 2 + obstacles[k, 3] ** 2))
     for k in range(d):
         x = obstacles[k, 0]
         y = obstacles[k, 1]

@@ -20,7 +20,7 @@ from copi.ceilings._kernels import (
     sample_futures,
     window,
 )
-from copi.core import Agent, Observation, Task, check_sensing
+from copi.core import Agent, Observation, Sensing, Task, check_sensing
 from copi.errors import InvalidArgumentError
 from copi.geometry import clearance
 
@@ -113,7 +113,7 @@ class ModelOracle(Agent):
     """
 
     name = "model-oracle"
-    sensing = "oracle"
+    sensing: Sensing = "oracle"
 
     def __init__(
         self,
@@ -156,6 +156,10 @@ class ModelOracle(Agent):
         self.plan = plan
         self.moves, _ = compass_moves()
         self._risks: list[float] = []
+        # the motion model: the simulator's turn spread; a disc seen waiting moves at the
+        # others' greatest speed (a subclass that estimates them sets both each step)
+        self.turn_sd = TURN_SD
+        self.fallback_speed = 0.0
 
     def reset(self, task: Task) -> None:
         check_sensing(task.sensing, self.sensing, method=self.name)
@@ -213,8 +217,9 @@ class ModelOracle(Agent):
         f = self.field
         seed = int(self.rng.integers(2**31 - 1))
         steps = 2 if self.plan == "greedy" else self.horizon  # what the plan looks at
-        samples = sample_futures(obstacles, self.segs, self.samples, steps, TURN_SD,
-                                 _RETRIES, seed, self.clear, f.x0, f.y0, self.fine)  # fmt: skip
+        samples = sample_futures(obstacles, self.segs, self.samples, steps, self.turn_sd,
+                                 _RETRIES, seed, self.clear, f.x0, f.y0, self.fine,
+                                 self.fallback_speed)  # fmt: skip
         n = 2 * self._half + 1
         i0 = int(math.floor((p[1] - f.y0) / _RES)) - self._half
         j0 = int(math.floor((p[0] - f.x0) / _RES)) - self._half

@@ -48,6 +48,7 @@ from copi.baselines import (
     Replan,
     Straight,
     TangentBug,
+    TrackedMPC,
     navground_available,
     packaged_policy,
 )
@@ -533,6 +534,13 @@ def _register_builtins() -> None:
         summary="Dynamic Window: sampled velocities scored on the ranges (hand-written)")
     reg("tangent-bug", TangentBug, default=True,
         summary="TangentBug on the ranges (hand-written)")
+    # the model-oracle's planner on what a map-level agent makes out (0.3-3 s an episode,
+    # so run apart like model-oracle: --methods tracked-mpc)
+    reg("tracked-mpc", TrackedMPC, sensing="map", default=False,
+        summary="model-predictive control (the model-oracle's planner) on the discs it makes "
+        "out in its reading (circle fits of the hits the map does not explain, velocities "
+        "from their last displacement), their speed and turn spread estimated from its own "
+        "tracks (hand-written; nothing learnt offline)")
     reg("replan", Replan, sensing="oracle", default=True,
         summary="shortest path on the current snapshot, obstacles inflated, re-planned "
         "(hand-written; sees every obstacle)")

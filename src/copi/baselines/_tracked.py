@@ -72,7 +72,7 @@ class DiscTracker:
     >>> t = DiscTracker(sensor.n_rays, sensor.max_range)
     >>> centres, radii, rays = t.detect(ranges, static, me)
     >>> np.round(centres, 2).tolist(), np.round(radii, 1).tolist(), rays.tolist()
-    ([[13.0, 10.0]], [0.8], [5])
+    ([[13.0, 10.0]], [0.8], [3])
     """
 
     def __init__(

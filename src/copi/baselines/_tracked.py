@@ -28,8 +28,8 @@ def _fit_circle(
     pts: NDArray[np.float64], r: float, c0: NDArray[np.float64]
 ) -> tuple[NDArray[np.float64], float]:
     """Centre of the circle of radius ``r`` through ``pts`` (Gauss-Newton from ``c0``) and
-    its mean squared residual. Eight steps of a 2x2 least squares: scipy's solvers cost
-    more to call than the whole fit."""
+    its mean squared residual. Eight Gauss-Newton steps written out, because
+    scipy.optimize.least_squares costs more to call than this whole fit of a few points."""
     c = c0.copy()
     for _ in range(8):
         d = pts - c
@@ -124,7 +124,8 @@ class DiscTracker:
     def detect(
         self, ranges: NDArray[np.float64], static: NDArray[np.float64], position: Any
     ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
-        """The discs in one reading: centres (k, 2), radii (k,) and the rays on each."""
+        """The discs in one reading: centres (k, 2), radii (k,) and the rays on each
+        (the radii of well-measured discs are remembered for the short arcs to come)."""
         s = np.asarray(ranges, dtype=np.float64)
         st = np.asarray(static, dtype=np.float64)
         if s.shape != (self.n_rays,) or st.shape != (self.n_rays,):

@@ -10,8 +10,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from copi.ceilings import ModelOracle
-from copi.core import Observation, Sensing, Task, check_sensing
+from copi.core import Observation, Sensing, Task
 from copi.errors import InvalidArgumentError
+from copi.geometry import ring_angles
 from copi.learning._safety import EXPLAINED
 
 __all__ = ["DiscTracker", "TrackedMPC"]
@@ -22,6 +23,12 @@ _WELL = 3  # rays on a disc for its fit (and its displacement) to count as measu
 _MIN_SPEED_SAMPLES = 5
 _MIN_TURN_SAMPLES = 20
 _MAD = 1.4826  # standard deviation / median absolute deviation, for a normal law
+
+
+def _check_positive(**values: Any) -> None:
+    for key, v in values.items():
+        if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
+            raise InvalidArgumentError(f"{key} must be a positive number; got {v!r}")
 
 
 def _fit_circle(
@@ -83,26 +90,20 @@ class DiscTracker:
         speed: float = 0.7,
         turn_sd: float = 1.0,
     ) -> None:
-        for key, v in (("speed", speed), ("turn_sd", turn_sd), ("max_range", max_range)):
-            if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
-                raise InvalidArgumentError(f"{key} must be a positive number; got {v!r}")
+        _check_positive(speed=speed, turn_sd=turn_sd, max_range=max_range)
         if int(n_rays) != n_rays or n_rays < 4:
             raise InvalidArgumentError(f"n_rays must be a whole number >= 4; got {n_rays!r}")
         self.n_rays = int(n_rays)
         self.max_range = float(max_range)
-        ang = 2 * np.pi * np.arange(self.n_rays) / self.n_rays
+        ang = ring_angles(self.n_rays)
         self._unit = np.column_stack([np.cos(ang), np.sin(ang)])
         self.prior_speed = float(speed)
         self.prior_turn_sd = float(turn_sd)
-        self.reset()
-
-    def reset(self) -> None:
-        """Forget the discs; keep the motion model estimated so far."""
         self._tracks: list[dict[str, Any]] = []
-        if not hasattr(self, "_speeds"):
-            self._speeds: list[float] = []
-            self._turns: list[float] = []
-            self._radii: list[float] = []
+        # what its tracks measured: displacements, heading changes, radii
+        self._speeds: list[float] = []
+        self._turns: list[float] = []
+        self._radii: list[float] = []
 
     @property
     def speed(self) -> float:
@@ -199,9 +200,10 @@ class DiscTracker:
             t = tracks[ti]
             disp = C[di] - t["c"]
             length = math.hypot(disp[0], disp[1])
-            well = rays[di] >= _WELL and t["rays"] >= _WELL
+            # measured: both fits good, and it moved (a heading to speak of)
+            measured = rays[di] >= _WELL and t["rays"] >= _WELL and length > 0.05
             heading = math.atan2(disp[1], disp[0])
-            if well and length > 0.05:
+            if measured:
                 self._speeds.append(length)
                 if t["heading"] is not None:
                     turn = (heading - t["heading"] + math.pi) % (2 * math.pi) - math.pi
@@ -210,7 +212,7 @@ class DiscTracker:
             new[di] = {
                 "c": C[di].copy(), "rays": int(rays[di]), "known": known,
                 "v": disp / length * speed if known else np.zeros(2),
-                "heading": heading if well and length > 0.05 else None,
+                "heading": heading if measured else None,
             }  # fmt: skip
         for di in range(len(C)):
             if new[di] is None:  # first seen: heading unknown
@@ -266,14 +268,11 @@ class TrackedMPC(ModelOracle):
     ) -> None:
         super().__init__(samples=samples, horizon=horizon, plan=plan, loss=loss,
                          margin=margin, escape=escape, seed=seed)  # fmt: skip
+        _check_positive(speed=speed, turn_sd=turn_sd)
         self.prior_speed = float(speed)
         self.prior_turn_sd = float(turn_sd)
-        DiscTracker(32, 10.0, speed=self.prior_speed, turn_sd=self.prior_turn_sd)  # checks
 
     def reset(self, task: Task) -> None:
-        check_sensing(task.sensing, self.sensing, method=self.name)
-        if task.world is None or task.goal is None:
-            raise InvalidArgumentError(f"{self.name} needs the world and the goal (level 'map')")
         super().reset(task)
         self.tracker = DiscTracker(task.n_rays, task.max_range, speed=self.prior_speed,
                                    turn_sd=self.prior_turn_sd)  # fmt: skip

@@ -165,8 +165,8 @@ class ModelOracle(Agent):
         check_sensing(task.sensing, self.sensing, method=self.name)
         if task.world is None or task.goal is None:
             raise InvalidArgumentError(
-                f"model-oracle needs the world and the goal (level 'oracle'); got a task at "
-                f"{task.sensing!r} without them"
+                f"{self.name} needs the world and the goal (level {self.sensing!r}); got a "
+                f"task at {task.sensing!r} without them"
             )
         self.rng = np.random.default_rng(self.seed)
         self.r = float(task.agent_radius)

@@ -62,7 +62,7 @@ def main() -> bool:
             per=1000,
         ),
     ]
-    from copi.online import _kernels
+    from copi.online import _learnt_kernels
 
     static = np.full(caps.n_rays, np.inf)
     p, out, feat = np.empty(17), np.empty(5), np.empty(8 * caps.n_rays)
@@ -74,7 +74,7 @@ def main() -> bool:
 
         def decide() -> None:
             k = next(j) % 2000
-            _kernels.decide_learnt(
+            _learnt_kernels.decide_learnt(
                 readings[k], readings[k - 1], static, *args, want[k, 0], want[k, 1], 5.0,
                 a.guard, a.alpha, a.beta, a.wait, a._cos, a._sin, 10.0, a._compass, feat, p, out,
                 a._landmarks, -1, -1, 0.0, True, a.model.static_aware,

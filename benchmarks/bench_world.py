@@ -13,7 +13,7 @@ import numpy as np
 
 from benchmarks._timing import Timing, median_time, note, report
 from copi.geometry import cast_rays
-from copi.geometry._kernels import scan
+from copi.geometry.kernels import scan
 from copi.geometry.reference import cast_rays_numpy, cast_rays_shapely
 from copi.world import NavigationEnv, RangeSensor, WorldParams, random_world, sample_start_goal
 

@@ -140,8 +140,8 @@ def _choose(args: tuple[str, int, int, str, float, float, int]) -> bool:
     """One validation episode with the simplified rule, P from ``source``."""
     from copi.experiments import make_agent, run_episode
     from copi.experiments.navigation import draw_episode
-    from copi.learning._safety import safety_probabilities
-    from copi.online import _kernels
+    from copi.learning.kernels import safety_probabilities
+    from copi.online import kernels
 
     caps_path, k, seed, source, alpha, guard, futures = args
     caps = _setup(caps_path)
@@ -167,7 +167,7 @@ def _choose(args: tuple[str, int, int, str, float, float, int]) -> bool:
         if norm == 0.0:
             return np.zeros(2)
         ok = np.zeros(16, dtype=np.bool_)
-        _kernels.guard_verdicts(s, obs.static, unit, desired[0], desired[1], reach, guard,
+        kernels.guard_verdicts(s, obs.static, unit, desired[0], desired[1], reach, guard,
                                 agent._cos, agent._sin, agent.max_range, ok)  # fmt: skip
         along = unit @ (np.asarray(desired) / norm)
         score = along + alpha * np.log(np.maximum(p[:16], 1e-9))

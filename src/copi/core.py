@@ -54,6 +54,7 @@ if TYPE_CHECKING:  # the interface needs the type only
     from copi.world import World
 
 __all__ = [
+    "EXPLAINED",
     "OUTCOMES",
     "SENSING_LEVELS",
     "SENSOR_STRATEGIES",
@@ -78,6 +79,11 @@ with one; out of steps; or a goal the agent's disc cannot reach at all (no path 
 static world for its radius: the episode is not run, and counts in no rate)."""
 
 OUTCOMES: tuple[Outcome, ...] = get_args(Outcome)
+
+EXPLAINED = 0.05
+"""A hit of :attr:`Observation.ranges` within this of :attr:`Observation.static` is the
+static map's (a wall); a nearer one is something that moves. The one tolerance of every
+method that tells the two apart (copi's guards and safety features, tracked-mpc)."""
 
 SENSOR_STRATEGIES = ("greedy", "mapping", "causal")
 """Global strategies at level ``sensor`` (levels with a map follow the static route):

@@ -42,10 +42,10 @@ def test_compiling_notice_only_when_a_kernel_is_not_cached(
     monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
     monkeypatch.setattr(_common, "_noticed", False)
-    _common.compiling_notice(["copi.geometry._kernels:step_world"])
+    _common.compiling_notice(["copi.geometry.kernels:step_world"])
     # the test session has run the simulator, so its kernel is cached by now or being
     # compiled in this process; a name that is not a kernel is taken as cached too
-    _common.compiling_notice(["copi.geometry._kernels:no_such_kernel"])
+    _common.compiling_notice(["copi.geometry.kernels:no_such_kernel"])
     err = capsys.readouterr().err
     assert err == "" or err.startswith("compiling kernels once (numba), ~4 s")
 
@@ -57,9 +57,9 @@ def test_compiling_notice_only_when_a_kernel_is_not_cached(
                     return {}
 
     monkeypatch.setattr(_common, "_noticed", False)
-    monkeypatch.setattr("copi.online._kernels.decide", Uncached, raising=True)
-    _common.compiling_notice(["copi.online._kernels:decide"])
-    _common.compiling_notice(["copi.online._kernels:decide"])  # once per process
+    monkeypatch.setattr("copi.online.kernels.decide", Uncached, raising=True)
+    _common.compiling_notice(["copi.online.kernels:decide"])
+    _common.compiling_notice(["copi.online.kernels:decide"])  # once per process
     err = capsys.readouterr().err
     assert err.splitlines() == ["compiling kernels once (numba), ~2 s; later runs reuse them"]
 

@@ -89,9 +89,9 @@ def test_the_chain_is_learnt_on_contexts_that_see_motion(moving, tmp_path) -> No
         Capabilities.load(tmp_path / "far.npz")
     with pytest.raises(InvalidArgumentError, match="motion must be True or False"):
         LearnParams(motion=1)
-    from copi.online import _kernels
+    from copi.online import kernels
 
-    assert _kernels.MOTION_CLIP == MOTION_CLIP  # the compiled copy of the constant
+    assert kernels.MOTION_CLIP == MOTION_CLIP  # the compiled copy of the constant
 
 
 def test_the_learnt_agent_recognises_the_context_with_its_motion(moving) -> None:

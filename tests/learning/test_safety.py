@@ -22,16 +22,18 @@ from copi.learning import Capabilities, LearnParams, learn, simulated_steps
 from copi.learning._safety import (
     SafetyModel,
     _probe_row,
-    kernel_net,
     predict,
     probe_states,
-    ring_features,
-    safety_features,
-    safety_probabilities,
     second_move_clear,
     template_priors,
 )
 from copi.learning._symmetry import SymmetryGroup, ring_operators
+from copi.learning.kernels import (
+    kernel_net,
+    ring_features,
+    safety_features,
+    safety_probabilities,
+)
 from copi.online import LearntAgent
 from copi.world import Simulator, World
 
@@ -232,7 +234,7 @@ def test_static_aware_capabilities_round_trip_and_the_flag_is_checked(tmp_path) 
 @settings(max_examples=60, deadline=None)
 @given(data=st.data())
 def test_scoring_only_the_promising_directions_chooses_as_scoring_all(learnt, data) -> None:
-    from copi.online import _kernels
+    from copi.online import _learnt_kernels
 
     agent = LearntAgent(learnt, alpha=2.0, beta=data.draw(st.sampled_from([0.0, 0.5])),
                         wait=False, guard=1.05)  # fmt: skip
@@ -249,7 +251,7 @@ def test_scoring_only_the_promising_directions_chooses_as_scoring_all(learnt, da
     outs = []
     for lazy in (True, False):
         out, p = np.empty(5), np.empty(17)
-        _kernels.decide_learnt(
+        _learnt_kernels.decide_learnt(
             s, prev, static, agent._nodes_t, agent._prior, net, aim[0], aim[1], 5.0, 1.05,
             2.0, agent.beta, False, agent._cos, agent._sin, 10.0, agent._compass, np.empty(8 * 32), p, out,
             agent._landmarks, prev_landmark, keep, persist, lazy, aware,
@@ -263,7 +265,7 @@ def test_scoring_only_the_promising_directions_chooses_as_scoring_all(learnt, da
 
 def test_a_batch_decides_as_one_agent_at_a_time(learnt) -> None:
     from copi.learning import explore
-    from copi.online import _kernels
+    from copi.online import _learnt_kernels
 
     agent = LearntAgent(learnt, alpha=2.0, beta=0.5, wait=False, guard=1.05)
     r = explore(2, 120, seed=5).readings
@@ -278,7 +280,7 @@ def test_a_batch_decides_as_one_agent_at_a_time(learnt) -> None:
         actions, nodes = agent.decide_batch(s, prev, want, reach, static)
         for i in range(100):
             out, p = np.empty(5), np.empty(17)
-            _kernels.decide_learnt(
+            _learnt_kernels.decide_learnt(
                 s[i], prev[i], static[i], agent._nodes_t, agent._prior, agent._net, want[i, 0],
                 want[i, 1], reach[i], 1.05, 2.0, 0.5, False, agent._cos, agent._sin, 10.0,
                 agent._compass, np.empty(256), p, out, agent._landmarks, -1, -1, 0.0, True,
@@ -301,7 +303,7 @@ def test_a_batch_decides_as_one_agent_at_a_time(learnt) -> None:
 
 
 def test_a_policy_lasts_while_the_reading_stays_within_its_landmark(learnt) -> None:
-    from copi.online import _kernels
+    from copi.online import _learnt_kernels
 
     agent = LearntAgent(learnt, alpha=2.0, wait=False, guard=1.05, persist=0.05)
     s = np.full(32, 10.0)  # open space: every direction safe alike
@@ -311,7 +313,7 @@ def test_a_policy_lasts_while_the_reading_stays_within_its_landmark(learnt) -> N
 
     def choose(prev_landmark: int, keep: int, persist: float) -> int:
         out, p = np.empty(5), np.empty(17)
-        _kernels.decide_learnt(
+        _learnt_kernels.decide_learnt(
             s, s, np.full(32, np.inf), agent._nodes_t, agent._prior, agent._net, aim[0], aim[1],
             5.0, 1.05, 2.0, 0.0, False, agent._cos, agent._sin, 10.0, agent._compass, np.empty(256), p, out,
             agent._landmarks, prev_landmark, keep, persist, True, False,
@@ -397,12 +399,12 @@ def test_second_move_clear_needs_one_move_that_keeps_its_room() -> None:
     coming down at 0.8 a step onto the agent (radius 0.3). Waiting is in contact; a step
     east passes it with about 0.29 to spare: a clear move for a room of 0 or 0.2, none for
     0.5. A wall just east of the agent stops that step short: no clear move then."""
-    from copi.geometry._kernels import _closest_approach
+    from copi.geometry.kernels import closest_approach
 
     segs = np.zeros((0, 4))
     moves = np.array([[1.0, 0.0], [0.0, 0.0]])
     c1, c2 = np.array([[20.0, 21.4]]), np.array([[20.0, 20.6]])
-    gaps = [_closest_approach(20.0, 20.0, dx, dy, 20.0, 21.4, 0.0, -0.8) - 0.8
+    gaps = [closest_approach(20.0, 20.0, dx, dy, 20.0, 21.4, 0.0, -0.8) - 0.8
             for dx, dy in moves]  # fmt: skip
     assert gaps[1] < 0 < 0.2 < gaps[0] < 0.5
     for clear in (0.0, 0.2, 0.5):

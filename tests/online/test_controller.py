@@ -224,7 +224,7 @@ def test_continual_growth_rate_is_checked() -> None:
 def test_room_distances_match_a_plain_rendition(seed, angle, step, walls) -> None:
     """The guard's distances (hit points listed once, minima over squared distances rooted
     once) equal the distances measured hit by hit with numpy."""
-    from copi.online import _kernels
+    from copi.online import kernels
 
     n = 32
     rng = np.random.default_rng(seed)
@@ -233,9 +233,9 @@ def test_room_distances_match_a_plain_rendition(seed, angle, step, walls) -> Non
     a = 2 * np.pi * np.arange(n) / n
     cos, sin = np.cos(a), np.sin(a)
     hits = np.empty((2, n))
-    km, k0 = _kernels._hits(s, static, cos, sin, 10.0, hits)
+    km, k0 = kernels._hits(s, static, cos, sin, 10.0, hits)
     ax, ay = math.cos(angle), math.sin(angle)
-    end, sweep, sweep_all = _kernels._room(hits, km, k0, ax, ay, step)
+    end, sweep, sweep_all = kernels._room(hits, km, k0, ax, ay, step)
     seen = s < 10.0
     moving = seen & (s < static - 0.05)
     pts = np.column_stack([s * cos, s * sin])
@@ -254,7 +254,7 @@ def test_the_batched_screen_finds_the_exact_nearest_node(seed, scale) -> None:
     """The float32 screen (norms folded into one product) keeps the exact nearest node
     among its candidates, for nodes near one another and far from the origin (where
     float32's error is largest)."""
-    from copi.online import _kernels
+    from copi.online import kernels
     from copi.online._controller import screen_nodes, screen_products
 
     rng = np.random.default_rng(seed)
@@ -264,7 +264,7 @@ def test_the_batched_screen_finds_the_exact_nearest_node(seed, scale) -> None:
     gram, sq = screen_products(x, screen_nodes(nodes))
     nodes_t = np.ascontiguousarray(nodes.T)
     for b in range(len(x)):
-        node, d2 = _kernels._screened_nearest(x[b], gram[b], sq[b], nodes_t)
+        node, d2 = kernels._screened_nearest(x[b], gram[b], sq[b], nodes_t)
         full = ((nodes - x[b]) ** 2).sum(1)
         assert node == int(np.argmin(full))
         assert d2 == pytest.approx(full.min(), rel=1e-12)

@@ -7,7 +7,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from copi.errors import InvalidArgumentError
-from copi.geometry._kernels import _closest_approach
+from copi.geometry.kernels import closest_approach
 from copi.world import RandomWalk, RangeSensor, Simulator, random_world
 from tests.common import PILLARS, U_TRAP
 
@@ -43,7 +43,7 @@ def test_closest_approach_matches_dense_sampling(v: list[float]) -> None:
     ax, ay, adx, ady, bx, by, bdx, bdy = v
     t = np.linspace(0, 1, 20001)
     dense = np.hypot(ax + t * adx - bx - t * bdx, ay + t * ady - by - t * bdy).min()
-    exact = _closest_approach(ax, ay, adx, ady, bx, by, bdx, bdy)
+    exact = closest_approach(ax, ay, adx, ady, bx, by, bdx, bdy)
     assert exact <= dense + 1e-12
     # sampling every 1/20000 of the step misses the minimum by at most |v| / 40000
     assert dense - exact <= np.hypot(adx - bdx, ady - bdy) / 40000 + 1e-12

@@ -47,7 +47,7 @@ from copi._npz import read_metadata, read_npz
 from copi.baselines._common import Steered
 from copi.core import Observation, Task
 from copi.errors import CopiError, InvalidArgumentError
-from copi.online import _kernels
+from copi.online import kernels
 
 __all__ = [
     "OBSERVATION",
@@ -385,7 +385,7 @@ class PPOAgent(Steered):
         if speed < 1e-9:
             return v
         out = self._out
-        _kernels.decide(
+        kernels.decide(
             np.asarray(obs.ranges, dtype=np.float64), static, self._node, self._cand, self._ok,
             v[0], v[1], max(reach, 1.0) * speed, self.guard, self.cos, self.sin,
             self.max_range, out,

@@ -12,7 +12,7 @@ from numpy.typing import NDArray
 from copi.baselines._common import Steered, unit
 from copi.core import Observation, Task
 from copi.errors import InvalidArgumentError
-from copi.online import _kernels
+from copi.online import kernels
 
 __all__ = ["CompassGuard", "Straight"]
 
@@ -71,7 +71,7 @@ class CompassGuard(Steered):
     ) -> NDArray[np.float64]:
         static = self._no_static if obs.static is None else obs.static
         out = self._out
-        _kernels.decide(
+        kernels.decide(
             np.asarray(obs.ranges, dtype=np.float64), static, self._node, self._cand, self._ok,
             desired[0], desired[1], reach, self.guard, self.cos, self.sin, self.max_range, out,
         )  # fmt: skip
@@ -81,12 +81,12 @@ class CompassGuard(Steered):
 
     def _explain_guard(self, obs: Observation, static: Any, desired: Any, reach: float) -> None:
         """Each compass move's alignment with the global direction, -inf where the guard
-        refuses it (the kernel's own test, :func:`copi.online._kernels.guard_verdicts`)."""
+        refuses it (the kernel's own test, :func:`copi.online.kernels.guard_verdicts`)."""
         ranges = np.asarray(obs.ranges, dtype=np.float64)
         u, _ = unit(desired)
         dirs = np.ascontiguousarray(self._cand[0])
         admitted = np.empty(len(dirs), dtype=np.bool_)
-        _kernels.guard_verdicts(ranges, static, dirs, float(desired[0]), float(desired[1]),
+        kernels.guard_verdicts(ranges, static, dirs, float(desired[0]), float(desired[1]),
                                 reach, self.guard, self.cos, self.sin, self.max_range,
                                 admitted)  # fmt: skip
         self._explained(dirs, np.where(admitted, dirs @ u, -np.inf),

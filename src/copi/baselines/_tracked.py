@@ -10,10 +10,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from copi.ceilings import ModelOracle
-from copi.core import Observation, Sensing, Task
+from copi.core import EXPLAINED, Observation, Sensing, Task
 from copi.errors import InvalidArgumentError
 from copi.geometry import ring_angles
-from copi.learning._safety import EXPLAINED
 
 __all__ = ["DiscTracker", "TrackedMPC"]
 
@@ -53,7 +52,7 @@ class DiscTracker:
 
     At level ``map`` an agent knows where it is and what the static map alone would read
     (``obs.static``); a ray that reads nearer than that by more than
-    :data:`copi.learning._safety.EXPLAINED` hit something that moves. Neighbouring such
+    :data:`copi.core.EXPLAINED` hit something that moves. Neighbouring such
     hits form an arc; an arc of three rays or more is fitted by a circle (radii 0.4 to 1.0
     tried, the best fit kept), an arc of one or two rays is taken for a disc of the radius
     seen so far (on average) behind its middle hit. Each disc is matched to the nearest

@@ -16,7 +16,7 @@ from numba import njit
 from numpy.typing import NDArray
 
 from copi.geometry import clearance
-from copi.planning._kernels import _heap_pop, _heap_push, _heap_room
+from copi.planning.kernels import heap_pop, heap_push, heap_room
 from copi.world import World
 
 __all__ = ["GoalField"]
@@ -36,10 +36,10 @@ def _dijkstra(free, gi, gj, h, out):  # type: ignore[no-untyped-def]
     keys = np.empty(cap)
     items = np.empty(cap, dtype=np.int64)
     out[gi, gj] = 0.0
-    size = _heap_push(keys, items, 0, 0.0, gi * nx + gj)
+    size = heap_push(keys, items, 0, 0.0, gi * nx + gj)
     done = np.zeros((ny, nx), dtype=np.bool_)
     while size > 0:
-        d, u, size = _heap_pop(keys, items, size)
+        d, u, size = heap_pop(keys, items, size)
         i = u // nx
         j = u % nx
         if done[i, j]:
@@ -62,8 +62,8 @@ def _dijkstra(free, gi, gj, h, out):  # type: ignore[no-untyped-def]
                 nd = d + step
                 if nd < out[a, b]:
                     out[a, b] = nd
-                    keys, items = _heap_room(keys, items, size)
-                    size = _heap_push(keys, items, size, nd, a * nx + b)
+                    keys, items = heap_room(keys, items, size)
+                    size = heap_push(keys, items, size, nd, a * nx + b)
 
 
 @njit(cache=True, inline="always")

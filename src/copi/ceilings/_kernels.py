@@ -6,9 +6,9 @@ of thousands of moves an episode. No planning library searches a continuous posi
 against moving discs with the simulator's swept tests; networkx or Python heaps would be
 a hundred times slower than these loops.
 
-The tests are the simulator's (:mod:`copi.geometry._kernels`): a move is made only when
-a wall does not stop it (``_sweep_one``), and it is in contact when the closest approach
-of the two linear motions over the step is below the sum of radii (``_closest_approach``).
+The tests are the simulator's (:mod:`copi.geometry.kernels`): a move is made only when
+a wall does not stop it (``sweep_one``), and it is in contact when the closest approach
+of the two linear motions over the step is below the sum of radii (``closest_approach``).
 """
 
 from __future__ import annotations
@@ -20,8 +20,14 @@ from numba import njit, types
 from numba.typed import Dict
 
 from copi.ceilings._field import field_at
-from copi.geometry._kernels import _closest_approach, _sweep_one, point_segment_d2
-from copi.planning._kernels import _heap_pop, _heap_push
+from copi.geometry.kernels import (
+    closest_approach,
+    escapes,
+    free_moves,
+    local_segments,
+    sweep_one,
+)
+from copi.planning.kernels import heap_pop, heap_push
 
 # A move must clear every wall and disc by this much more than the simulator demands, so
 # that rounding (the simulator normalises a command of norm 1 + 1e-16) never turns a
@@ -38,22 +44,6 @@ def _key(x, y, t, q):  # type: ignore[no-untyped-def]
     iy = int(math.floor(y / q)) + _OFFSET
     return (np.int64(t) * _SIDE + iy) * _SIDE + ix
 
-
-@njit(cache=True)
-def local_segments(x, y, segs, reach):  # type: ignore[no-untyped-def]
-    """The segments within ``reach`` of (x, y): the only ones a move shorter than
-    ``reach`` minus the disc's radius can touch."""
-    n = 0
-    keep = np.empty(segs.shape[0], dtype=np.int64)
-    r2 = reach * reach
-    for k in range(segs.shape[0]):
-        if point_segment_d2(x, y, segs, k) <= r2:
-            keep[n] = k
-            n += 1
-    out = np.empty((n, 4))
-    for i in range(n):
-        out[i] = segs[keep[i]]
-    return out
 
 
 @njit(cache=True)
@@ -102,9 +92,9 @@ def spacetime_astar(  # type: ignore[no-untyped-def]
     if not math.isfinite(h0):
         return -1, n, xs, ys, parent, move
     seen[_key(x0, y0, 0, q)] = True
-    size = _heap_push(keys, items, 0, weight * max(h0 - tol, 0.0), 0)
+    size = heap_push(keys, items, 0, weight * max(h0 - tol, 0.0), 0)
     while size > 0:
-        _, u, size = _heap_pop(keys, items, size)
+        _, u, size = heap_pop(keys, items, size)
         x = xs[u]
         y = ys[u]
         t = ts[u]
@@ -112,7 +102,7 @@ def spacetime_astar(  # type: ignore[no-untyped-def]
             continue
         local = local_segments(x, y, segs, 1.0 + r + 1e-3)
         for j in range(n_dirs):
-            free[j] = _sweep_one(x, y, unit[j, 0], unit[j, 1], local, r)
+            free[j] = sweep_one(x, y, unit[j, 0], unit[j, 1], local, r)
         for m in range(moves.shape[0]):
             dx = moves[m, 0]
             dy = moves[m, 1]
@@ -124,7 +114,7 @@ def spacetime_astar(  # type: ignore[no-untyped-def]
             for k in range(d):
                 cx = future[t, k, 0]
                 cy = future[t, k, 1]
-                gap = _closest_approach(
+                gap = closest_approach(
                     x, y, dx, dy, cx, cy, future[t + 1, k, 0] - cx, future[t + 1, k, 1] - cy
                 )
                 if gap - r - future[t, k, 2] < MARGIN:
@@ -150,7 +140,7 @@ def spacetime_astar(  # type: ignore[no-untyped-def]
             n += 1
             if reached:
                 return n - 1, n, xs, ys, parent, move
-            size = _heap_push(keys, items, size, t + 1 + weight * max(hv - tol, 0.0), n - 1)
+            size = heap_push(keys, items, size, t + 1 + weight * max(hv - tol, 0.0), n - 1)
     return -1, n, xs, ys, parent, move
 
 
@@ -162,7 +152,7 @@ def sample_futures(  # type: ignore[no-untyped-def]
     obstacles, segs, n_samples, horizon, turn_sd, retries, seed, clear, cx0, cy0, ch, fallback
 ):
     """``n_samples`` futures of the discs' random walk over ``horizon`` steps, drawn with
-    the simulator's own rule (:func:`copi.geometry._kernels.step_world`): each step the
+    the simulator's own rule (:func:`copi.geometry.kernels.step_world`): each step the
     heading turns by N(0, ``turn_sd``); a move that would touch a wall tries ``retries``
     uniform headings, else the disc waits. A disc's heading and speed are those of its
     observed velocity (a disc seen waiting: a uniform heading at ``fallback``, or at the
@@ -210,7 +200,7 @@ def sample_futures(  # type: ignore[no-untyped-def]
                         g = 2.0 * math.pi * np.random.random()
                     dx = math.cos(g)
                     dy = math.sin(g)
-                    if speed > 0.0 and (far or _sweep_one(cx, cy, dx, dy, local, rk) >= speed):
+                    if speed > 0.0 and (far or sweep_one(cx, cy, dx, dy, local, rk) >= speed):
                         cx += speed * dx
                         cy += speed * dy
                         h = g
@@ -389,38 +379,6 @@ def window(ok, mid_ok, terminal, goal, i0, j0, n):  # type: ignore[no-untyped-de
     return w_ok, w_mid, w_term, w_goal
 
 
-@njit(cache=True, inline="always")
-def free_moves(qx, qy, r, segs, moves, free, room):  # type: ignore[no-untyped-def]
-    """``free[c]``: whether the walls ``segs`` let an agent of radius ``r`` at (qx, qy)
-    make move ``moves[c]`` whole with ``room`` to spare (waiting always)."""
-    for c in range(moves.shape[0]):
-        ex = moves[c, 0]
-        ey = moves[c, 1]
-        le = math.sqrt(ex * ex + ey * ey)
-        free[c] = le == 0.0 or _sweep_one(qx, qy, ex / le, ey / le, segs, r) >= le + room
-
-
-@njit(cache=True, inline="always")
-def escapes(qx, qy, r, moves, free, c1, c2, radii, near, n_near, clear):  # type: ignore[no-untyped-def]
-    """Whether some move ``moves[c]`` with ``free[c]`` (:func:`free_moves`) passes every
-    disc ``near[:n_near]``, moving linearly from ``c1`` to ``c2`` (radii ``radii``), with
-    ``clear`` to spare: the escape :func:`escape_move` asks of a first move's end."""
-    for c in range(moves.shape[0]):
-        if not free[c]:
-            continue
-        ok = True
-        for a in range(n_near):
-            k = near[a]
-            cx = c1[k, 0]
-            cy = c1[k, 1]
-            gap = _closest_approach(qx, qy, moves[c, 0], moves[c, 1], cx, cy, c2[k, 0] - cx,
-                                    c2[k, 1] - cy)  # fmt: skip
-            if gap - r - radii[k] < clear:
-                ok = False
-                break
-        if ok:
-            return True
-    return False
 
 
 @njit(cache=True)
@@ -455,7 +413,7 @@ def escape_move(  # type: ignore[no-untyped-def]
         dx = moves[m, 0]
         dy = moves[m, 1]
         length = math.sqrt(dx * dx + dy * dy)
-        swept = _sweep_one(px, py, dx / length, dy / length, local, r) if length > 0.0 else 0.0
+        swept = sweep_one(px, py, dx / length, dy / length, local, r) if length > 0.0 else 0.0
         if length > 0.0 and swept < length + MARGIN:
             continue
         qx = px + dx
@@ -470,7 +428,7 @@ def escape_move(  # type: ignore[no-untyped-def]
                 k = near[a]
                 cx = samples[s, 0, k, 0]
                 cy = samples[s, 0, k, 1]
-                gap = _closest_approach(px, py, dx, dy, cx, cy, samples[s, 1, k, 0] - cx,
+                gap = closest_approach(px, py, dx, dy, cx, cy, samples[s, 1, k, 0] - cx,
                                         samples[s, 1, k, 1] - cy)  # fmt: skip
                 if gap - r - radii[k] < margin:
                     hit = True

@@ -189,9 +189,9 @@ def _with_progress(label: str, total: int, run: Callable[[Callable[[int, int], N
 # numba kernels (a dispatcher each module calls first) and their compile time, seconds,
 # measured on one core of a 2024 laptop-class machine
 _KERNELS = {
-    "copi.geometry._kernels:step_world": 4,
-    "copi.planning._kernels:visibility_edges": 8,
-    "copi.online._kernels:decide": 2,
+    "copi.geometry.kernels:step_world": 4,
+    "copi.planning.kernels:visibility_edges": 8,
+    "copi.online.kernels:decide": 2,
 }
 _noticed = False
 

@@ -114,8 +114,7 @@ def world_import_movingai(
 ) -> None:
     """Turn a Moving AI grid map into a world: blocked cells become walls and holes."""
     from copi.planning.movingai import map_world, read_map
-    from copi.world import save_worlds
-    from copi.world._family_maps import scaled_map_world
+    from copi.world import save_worlds, scaled_map_world
 
     check_outputs({"the world file": (output, "json")}, inputs=[map_file])
     grid = read_map(map_file)

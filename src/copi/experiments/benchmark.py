@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from copi._rng import check_seed
+from copi._validation import positive_int
 from copi.errors import InvalidArgumentError, InvalidWorldError
 from copi.experiments._episode import optimal_to_goal, run_episode
 from copi.experiments._runs import (
@@ -52,7 +53,6 @@ from copi.experiments.navigation import (
     world_file_label,
 )
 from copi.experiments.presets import PRESETS
-from copi.geometry._arrays import positive_int
 from copi.learning import Capabilities, LearnParams
 from copi.world import check_family, family_inputs
 

@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 
 from copi._rng import check_seed
+from copi._validation import positive_int
 from copi.errors import InvalidArgumentError, InvalidWorldError
 from copi.experiments._episode import optimal_to_goal, run_episode
 from copi.experiments._runs import (
@@ -55,7 +56,6 @@ from copi.experiments.methods import (
     parse_methods,
 )
 from copi.experiments.navigation import _capabilities
-from copi.geometry._arrays import positive_int
 from copi.world import RangeSensor, Simulator, check_family, family_inputs, sample_world
 from copi.world._generate import place_obstacles, sample_start_goal
 

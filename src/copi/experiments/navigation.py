@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from copi._rng import check_seed
+from copi._validation import positive_int
 from copi.core import Sensing, check_sensing, check_strategy
 from copi.errors import InvalidArgumentError, InvalidWorldError, WorldFileError
 from copi.experiments._episode import EpisodeOutcome, optimal_to_goal, run_episode
@@ -25,7 +26,6 @@ from copi.experiments._runs import (
     file_sha,
 )
 from copi.experiments.methods import check_method_capabilities, make_agent, method_spec
-from copi.geometry._arrays import positive_int
 from copi.learning import Capabilities
 from copi.online import ContextController, LearntAgent
 from copi.world import (

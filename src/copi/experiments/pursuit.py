@@ -12,13 +12,13 @@ from typing import Any
 import numpy as np
 
 from copi._rng import check_seed
+from copi._validation import positive_int
 from copi.core import Agent, Observation, Task
 from copi.errors import InvalidArgumentError
 from copi.experiments._runs import MAX_EPISODES, RunIdentity, check_count
 from copi.experiments.navigation import _capabilities
 from copi.games import ChauffeurParams
 from copi.games._world_game import ChauffeurGame
-from copi.geometry._arrays import positive_int
 from copi.online import ContextController
 from copi.world import RangeSensor
 

@@ -13,7 +13,7 @@ import math
 
 from numba import njit
 
-from copi.geometry._kernels import _move_one
+from copi.geometry.kernels import move_one
 
 
 @njit(cache=True)
@@ -91,7 +91,7 @@ def pursuer_step(  # type: ignore[no-untyped-def]
         u = isaacs_u(px, py, heading, ex, ey, turn_radius, dturn) if steer else control
         dpx, dpy, heading = arc(heading, u, speed, turn_radius, h)
         if segs.shape[0] > 0:
-            nx, ny, _ = _move_one(px, py, dpx, dpy, segs, radius)
+            nx, ny, _ = move_one(px, py, dpx, dpy, segs, radius)
             dpx, dpy = nx - px, ny - py
         tau, near = first_contact(px, py, dpx, dpy, ex, ey, h * dex, h * dey, capture_radius)
         closest = min(closest, near)

@@ -7,9 +7,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from copi._validation import FloatArray, as_points, as_segments, positive
 from copi.errors import InvalidArgumentError
-from copi.geometry import _kernels
-from copi.geometry._arrays import FloatArray, as_points, as_segments, positive
+from copi.geometry import kernels
 
 __all__ = ["clearance", "move_discs"]
 
@@ -55,7 +55,7 @@ def move_discs(
     segs = as_segments(segments)
     r = positive(radius, "radius")
     out = np.empty((pos.shape[0], 3))
-    _kernels.move(pos, vel, segs, r, out)
+    kernels.move(pos, vel, segs, r, out)
     new, blocked = out[:, :2].copy(), out[:, 2] > 0.5
     return (new[0], blocked[0]) if single else (new, blocked)
 
@@ -74,5 +74,5 @@ def clearance(points: Any, segments: Any) -> FloatArray:
     if segs.shape[0] == 0:
         out[:] = np.inf
     else:
-        _kernels.clearance(pts, segs, out)
+        kernels.clearance(pts, segs, out)
     return out[0] if single else out

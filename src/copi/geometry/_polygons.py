@@ -6,8 +6,8 @@ from typing import Any
 
 import numpy as np
 
+from copi._validation import FloatArray, as_points
 from copi.errors import InvalidArgumentError
-from copi.geometry._arrays import FloatArray, as_points
 
 __all__ = ["as_ring", "orient", "ring_crossings", "ring_segments", "signed_area", "turned"]
 

@@ -6,9 +6,9 @@ from typing import Any
 
 import numpy as np
 
+from copi._validation import FloatArray, as_discs, as_points, as_segments, as_vector, positive
 from copi.errors import InvalidArgumentError
-from copi.geometry import _kernels
-from copi.geometry._arrays import FloatArray, as_discs, as_points, as_segments, as_vector, positive
+from copi.geometry import kernels
 
 __all__ = ["cast_rays", "ring_angles"]
 
@@ -90,7 +90,7 @@ def cast_rays(
         # Fast path: shapes checked above, values checked inside the compiled call.
         batch = pts[None] if single else pts
         out = np.empty((batch.shape[0], ang.shape[0]))
-        if _kernels.scan_checked(
+        if kernels.scan_checked(
             batch, np.cos(ang), np.sin(ang), segs, c, r, float(max_range), out
         ):
             return out[0] if single else out
@@ -101,7 +101,7 @@ def cast_rays(
     c, r = as_discs(centers, radii)
     mr = positive(max_range, "max_range")
     out = np.empty((pts.shape[0], ang.shape[0]))
-    _kernels.scan(pts, np.cos(ang), np.sin(ang), segs, c, r, mr, out)
+    kernels.scan(pts, np.cos(ang), np.sin(ang), segs, c, r, mr, out)
     return out[0] if single else out
 
 

@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 import shapely
 
-from copi.geometry._arrays import FloatArray
+from copi._validation import FloatArray
 
 __all__ = ["cast_rays_numpy", "cast_rays_shapely"]
 

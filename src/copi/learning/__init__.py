@@ -21,6 +21,7 @@ from copi.learning._policies import (
     compass,
     local_world,
 )
+from copi.learning._safety import SafetyModel
 from copi.learning._skeleton import Landmarks, bootstrap_landmarks, skeletonize
 from copi.learning._symmetry import (
     Operator,
@@ -45,6 +46,7 @@ __all__ = [
     "PolicyLearner",
     "PolicySet",
     "Reduction",
+    "SafetyModel",
     "SymmetryGroup",
     "ValueIterationLearner",
     "bootstrap_landmarks",

@@ -10,7 +10,7 @@ from multiprocessing import get_context
 import numpy as np
 from numpy.typing import NDArray
 
-from copi.geometry._arrays import positive_int
+from copi._validation import positive_int
 from copi.world import (
     RandomWalk,
     RangeSensor,

@@ -11,8 +11,8 @@ from typing import Any
 
 import numpy as np
 
+from copi._validation import positive_int
 from copi.errors import InvalidArgumentError
-from copi.geometry._arrays import positive_int
 from copi.learning._capabilities import Capabilities
 from copi.learning._contexts import (
     block_operators,

@@ -7,7 +7,7 @@ from __future__ import annotations
 from copi.online._agent import CopiAgent, Steering
 from copi.online._causal import CausalStrategy
 from copi.online._causal_file import CausalMapFormatError
-from copi.online._causal_map import CausalMap
+from copi.online._causal_map import CausalMap, CausalMapFile
 from copi.online._controller import ContextController, Decision
 from copi.online._learnt import LearntAgent
 from copi.online._mapping import Mapping
@@ -15,6 +15,7 @@ from copi.online._strategies import GlobalStrategy, Greedy, Route, make_strategy
 
 __all__ = [
     "CausalMap",
+    "CausalMapFile",
     "CausalMapFormatError",
     "CausalStrategy",
     "ContextController",

@@ -13,7 +13,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from copi.errors import InvalidArgumentError
-from copi.online._causal_file import CausalMapFormatError, load_causal_map
+from copi.online._causal_file import CausalMapFormatError
 from copi.online._causal_kernels import OFFSETS, plausible_options
 from copi.online._causal_map import CausalMap
 from copi.online._mapping import Mapping
@@ -265,7 +265,8 @@ class CausalStrategy:
         **kwargs: Any,
     ) -> CausalStrategy:
         """A strategy resuming the life saved in ``path`` (see :meth:`CausalMap.load`)."""
-        cmap, occ, hits = load_causal_map(path, world=world, capabilities=capabilities)
+        saved = CausalMap.read(path, world=world, capabilities=capabilities)
+        cmap, occ, hits = saved.map, saved.occupancy, saved.hits
         try:
             strategy = cls(cmap, **kwargs)
         except InvalidArgumentError as exc:

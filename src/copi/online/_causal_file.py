@@ -1,7 +1,8 @@
-"""The file format of a causal map (``.npz``, no pickle): what a life in one world taught
-(:class:`~copi.online._causal_map.CausalMap`), the occupancy grid learnt beside it, and
-what it is of (the world's identity, the capabilities' content hash). Read with the one
-npz reader copi's files share (:mod:`copi._npz`)."""
+"""The file format of a causal map (``.npz``, no pickle): the arrays of what a life in one
+world taught (:meth:`copi.online.CausalMap.save` lays them out), the occupancy grid
+learnt beside it, and what it is of (the world's identity, the capabilities' content
+hash). Read with the one npz reader copi's files share (:mod:`copi._npz`), every array
+checked before a map is built from it."""
 
 from __future__ import annotations
 
@@ -15,11 +16,10 @@ from numpy.typing import NDArray
 
 from copi._files import write_npz
 from copi._npz import read_metadata, read_npz
-from copi.errors import CopiError, InvalidArgumentError
-from copi.online._causal_map import MAX_SIDE, CausalMap
+from copi.errors import CopiError
 from copi.online._mapping import _CEIL, _FLOOR
 
-__all__ = ["CausalMapFormatError", "load_causal_map", "save_causal_map"]
+__all__ = ["CausalMapFormatError", "check_arrays", "read_causal_file", "write_causal_file"]
 
 FORMAT = "copi-causal-map"
 FORMAT_VERSION = 1
@@ -34,8 +34,6 @@ _MEMBERS = (
     "metadata",
 )  # fmt: skip
 """The only members read from a file; any other is ignored, never unpacked."""
-MAX_MEMBER_BYTES = 8 * 8 * MAX_SIDE * MAX_SIDE + 4096
-"""A member unpacking to more than this (the largest map's counts) is refused unread."""
 MAX_TOTAL_BYTES = 1 << 31
 
 
@@ -44,71 +42,29 @@ class CausalMapFormatError(CopiError):
     other capabilities."""
 
 
-def save_causal_map(
-    cmap: CausalMap,
-    path: str | os.PathLike[str],
-    *,
-    world: str = "",
-    capabilities: str = "",
-    occupancy: NDArray[np.float64] | None = None,
-    hits: NDArray[np.int64] | None = None,
+def write_causal_file(
+    path: str | os.PathLike[str], arrays: dict[str, NDArray[Any]], meta: dict[str, Any]
 ) -> Path:
-    """Write the map to ``path`` (``.npz``, no pickle), atomically, with what it is of:
-    ``world`` (an identity of the world it was learnt in), ``capabilities`` (the
-    content hash of the capabilities file whose templates are its contexts), and
-    optionally the occupancy grid learnt beside it."""
-    keys = sorted(cmap.outcomes)
-    out_rows = [(p, a, q, c) for p, a in keys for q, c in sorted(cmap.outcomes[(p, a)].items())]
-    ckeys = sorted(cmap.by_context)
-    ctx_rows = [(p, c, a, *cmap.by_context[(p, c, a)][:3]) for p, c, a in ckeys]
-    ctx_out = [
-        (p, c, a, q, k)
-        for p, c, a in ckeys
-        for q, k in sorted(cmap.by_context[(p, c, a)][3].items())
-    ]
-    arrays: dict[str, NDArray[Any]] = {
-        "n": cmap.n,
-        "steps": cmap.steps,
-        "contacts": cmap.contacts,
-        "outcome_keys": np.array([r[:3] for r in out_rows], dtype=np.int64).reshape(-1, 3),
-        "outcome_counts": np.array([r[3] for r in out_rows], dtype=np.float64),
-        "context_keys": np.array([r[:3] for r in ctx_rows], dtype=np.int64).reshape(-1, 3),
-        "context_stats": np.array([r[3:] for r in ctx_rows], dtype=np.float64).reshape(-1, 3),
-        "context_outcome_keys": np.array(
-            [r[:4] for r in ctx_out], dtype=np.int64
-        ).reshape(-1, 4),
-        "context_outcome_counts": np.array([r[4] for r in ctx_out], dtype=np.float64),
-    }
-    if occupancy is not None:
-        arrays["occupancy"] = np.asarray(occupancy, dtype=np.float64)
-        if hits is not None:
-            arrays["hits"] = np.asarray(hits, dtype=np.int64)
-    meta = {
-        "format": FORMAT,
-        "version": FORMAT_VERSION,
-        "params": cmap.params,
-        "world": world,
-        "capabilities": capabilities,
-    }
-    arrays["metadata"] = np.array(json.dumps(meta, sort_keys=True))
-    return write_npz(path, arrays)
+    """Write a map's ``arrays`` and its metadata (its parameters, and what it is of) to
+    ``path``, atomically."""
+    meta = {"format": FORMAT, "version": FORMAT_VERSION, **meta}
+    return write_npz(path, {**arrays, "metadata": np.array(json.dumps(meta, sort_keys=True))})
 
 
-
-def load_causal_map(
+def read_causal_file(
     path: str | os.PathLike[str],
     *,
-    world: str | None = None,
-    capabilities: str | None = None,
-) -> tuple[CausalMap, NDArray[np.float64] | None, NDArray[np.int64] | None]:
-    """(map, occupancy grid or None, its hit counts or None) from a file written by
-    :func:`save_causal_map`; with ``world`` / ``capabilities`` given, a file of another
-    world or of other capabilities is refused, saying which. Every member is bounded in
-    size before it is read and in value by its meaning (counts within what a life can
-    produce, occupancy within the grid's bounds)."""
+    world: str | None,
+    capabilities: str | None,
+    max_member: int,
+) -> tuple[dict[str, Any], dict[str, NDArray[Any]]]:
+    """(the map's parameters, its arrays) from a file written by
+    :func:`write_causal_file`; with ``world`` / ``capabilities`` given, a file of another
+    world or of other capabilities is refused, saying which. A member unpacking to more
+    than ``max_member`` bytes (the largest map's counts) is refused unread."""
     p = Path(path)
     a = read_npz(p, _MEMBERS, error=CausalMapFormatError, what="causal map file",
-                 max_member=MAX_MEMBER_BYTES, max_total=MAX_TOTAL_BYTES)  # fmt: skip
+                 max_member=max_member, max_total=MAX_TOTAL_BYTES)  # fmt: skip
     meta = read_metadata(a, p, fmt=FORMAT, version=FORMAT_VERSION, error=CausalMapFormatError,
                          what="causal map")  # fmt: skip
     if world is not None and meta.get("world") != world:
@@ -123,39 +79,12 @@ def load_causal_map(
     params = meta.get("params")
     if not isinstance(params, dict):
         raise CausalMapFormatError(f"{p}: bad parameters (not a mapping: {params!r:.40})")
-    try:
-        cmap = CausalMap(**params)
-    except (InvalidArgumentError, TypeError, KeyError, ValueError, OverflowError) as exc:
-        raise CausalMapFormatError(f"{p}: bad parameters ({exc})") from None
-    _check_arrays(p, cmap, a)
-    cmap.n = a["n"].astype(np.float64)
-    cmap.steps = a["steps"].astype(np.float64)
-    cmap.contacts = a["contacts"].astype(np.float64)
-    for (pl, opt, q), c in zip(a["outcome_keys"].tolist(), a["outcome_counts"].tolist(),
-                               strict=True):  # fmt: skip
-        cmap.outcomes.setdefault((pl, opt), {})[q] = c
-    for (pl, c, opt), st in zip(a["context_keys"].tolist(), a["context_stats"].tolist(),
-                                strict=True):  # fmt: skip
-        cmap.by_context[(pl, c, opt)] = [st[0], st[1], st[2], {}]
-    for (pl, c, opt, q), k in zip(
-        a["context_outcome_keys"].tolist(), a["context_outcome_counts"].tolist(),
-        strict=True,
-    ):  # fmt: skip
-        entry = cmap.by_context.get((pl, c, opt))
-        if entry is None:
-            raise CausalMapFormatError(f"{p}: inconsistent contents (outcome of no option)")
-        entry[3][q] = k
-    occ = a.get("occupancy")
-    hits = a.get("hits")
-    return (
-        cmap,
-        None if occ is None else occ.astype(np.float64),
-        None if hits is None else hits.astype(np.int64),
-    )
+    return params, a
 
 
-def _check_arrays(p: Path, cmap: CausalMap, a: dict[str, NDArray[Any]]) -> None:
-    size = cmap.m * cmap.m
+def check_arrays(p: Path, m: int, a: dict[str, NDArray[Any]]) -> None:
+    """Refuse arrays that are not the counts of an m x m map (shapes, types, bounds)."""
+    size = m * m
     shapes = {
         "n": (size, 8), "steps": (size, 8), "contacts": (size, 8),
         "outcome_keys": (-1, 3), "outcome_counts": (-1,), "context_keys": (-1, 3),

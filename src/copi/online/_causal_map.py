@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import math
 import os
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -32,13 +33,22 @@ import numpy as np
 from numpy.typing import NDArray
 
 from copi.errors import InvalidArgumentError
+from copi.online._causal_file import (
+    CausalMapFormatError,
+    check_arrays,
+    read_causal_file,
+    write_causal_file,
+)
 from copi.online._causal_kernels import OFFSETS, option_values
 
-__all__ = ["CausalMap"]
+__all__ = ["CausalMap", "CausalMapFile"]
 
 _LENGTH = np.hypot(OFFSETS[:, 0], OFFSETS[:, 1])  # an option's length, in places
 MAX_SIDE = 2048
 """Places a side at most (a map of 2048^2 x 8 options is 270 MB)."""
+MAX_MEMBER_BYTES = 8 * 8 * MAX_SIDE * MAX_SIDE + 4096
+"""An array of a file unpacking to more than this (the largest map's counts) is refused
+unread."""
 MAX_PATIENCE = 1000
 """Most steps an option may spend in its place (a task has at most 1000 steps)."""
 MAX_WEIGHT = 1e4
@@ -257,11 +267,84 @@ class CausalMap:
         occupancy: NDArray[np.float64] | None = None,
         hits: NDArray[np.int64] | None = None,
     ) -> Path:
-        """Write the map to ``path`` (see :func:`copi.online._causal_file.save_causal_map`)."""
-        from copi.online._causal_file import save_causal_map
+        """Write the map to ``path`` (``.npz``, no pickle), atomically, with what it is of:
+        ``world`` (an identity of the world it was learnt in), ``capabilities`` (the
+        content hash of the capabilities file whose templates are its contexts), and
+        optionally the occupancy grid learnt beside it and its hit counts."""
+        keys = sorted(self.outcomes)
+        out_rows = [(p, a, q, c) for p, a in keys for q, c in sorted(self.outcomes[(p, a)].items())]
+        ckeys = sorted(self.by_context)
+        ctx_rows = [(p, c, a, *self.by_context[(p, c, a)][:3]) for p, c, a in ckeys]
+        ctx_out = [
+            (p, c, a, q, k)
+            for p, c, a in ckeys
+            for q, k in sorted(self.by_context[(p, c, a)][3].items())
+        ]
+        arrays: dict[str, NDArray[Any]] = {
+            "n": self.n,
+            "steps": self.steps,
+            "contacts": self.contacts,
+            "outcome_keys": np.array([r[:3] for r in out_rows], dtype=np.int64).reshape(-1, 3),
+            "outcome_counts": np.array([r[3] for r in out_rows], dtype=np.float64),
+            "context_keys": np.array([r[:3] for r in ctx_rows], dtype=np.int64).reshape(-1, 3),
+            "context_stats": np.array([r[3:] for r in ctx_rows], dtype=np.float64).reshape(-1, 3),
+            "context_outcome_keys": np.array(
+                [r[:4] for r in ctx_out], dtype=np.int64
+            ).reshape(-1, 4),
+            "context_outcome_counts": np.array([r[4] for r in ctx_out], dtype=np.float64),
+        }
+        if occupancy is not None:
+            arrays["occupancy"] = np.asarray(occupancy, dtype=np.float64)
+            if hits is not None:
+                arrays["hits"] = np.asarray(hits, dtype=np.int64)
+        meta = {"params": self.params, "world": world, "capabilities": capabilities}
+        return write_causal_file(path, arrays, meta)
 
-        return save_causal_map(self, path, world=world, capabilities=capabilities,
-                               occupancy=occupancy, hits=hits)  # fmt: skip
+    @classmethod
+    def read(
+        cls,
+        path: str | os.PathLike[str],
+        *,
+        world: str | None = None,
+        capabilities: str | None = None,
+    ) -> CausalMapFile:
+        """Everything a file written by :meth:`save` holds; with ``world`` /
+        ``capabilities`` given, a file of another world or of other capabilities is
+        refused, saying which. Every array is bounded in size before it is read and in
+        value by its meaning (counts within what a life can produce, occupancy within
+        the grid's bounds)."""
+        p = Path(path)
+        params, a = read_causal_file(p, world=world, capabilities=capabilities,
+                                     max_member=MAX_MEMBER_BYTES)  # fmt: skip
+        try:
+            cmap = cls(**params)
+        except (InvalidArgumentError, TypeError, KeyError, ValueError, OverflowError) as exc:
+            raise CausalMapFormatError(f"{p}: bad parameters ({exc})") from None
+        check_arrays(p, cmap.m, a)
+        cmap.n = a["n"].astype(np.float64)
+        cmap.steps = a["steps"].astype(np.float64)
+        cmap.contacts = a["contacts"].astype(np.float64)
+        for (pl, opt, q), c in zip(a["outcome_keys"].tolist(), a["outcome_counts"].tolist(),
+                                   strict=True):  # fmt: skip
+            cmap.outcomes.setdefault((pl, opt), {})[q] = c
+        for (pl, c, opt), st in zip(a["context_keys"].tolist(), a["context_stats"].tolist(),
+                                    strict=True):  # fmt: skip
+            cmap.by_context[(pl, c, opt)] = [st[0], st[1], st[2], {}]
+        for (pl, c, opt, q), k in zip(
+            a["context_outcome_keys"].tolist(), a["context_outcome_counts"].tolist(),
+            strict=True,
+        ):  # fmt: skip
+            entry = cmap.by_context.get((pl, c, opt))
+            if entry is None:
+                raise CausalMapFormatError(f"{p}: inconsistent contents (outcome of no option)")
+            entry[3][q] = k
+        occ = a.get("occupancy")
+        hits = a.get("hits")
+        return CausalMapFile(
+            cmap,
+            None if occ is None else occ.astype(np.float64),
+            None if hits is None else hits.astype(np.int64),
+        )
 
     @classmethod
     def load(
@@ -272,11 +355,20 @@ class CausalMap:
         capabilities: str | None = None,
     ) -> tuple[CausalMap, NDArray[np.float64] | None]:
         """(map, occupancy grid or None) from a file written by :meth:`save` (see
-        :func:`copi.online._causal_file.load_causal_map`)."""
-        from copi.online._causal_file import load_causal_map
+        :meth:`read`)."""
+        f = cls.read(path, world=world, capabilities=capabilities)
+        return f.map, f.occupancy
 
-        cmap, occupancy, _ = load_causal_map(path, world=world, capabilities=capabilities)
-        return cmap, occupancy
+
+@dataclass(frozen=True)
+class CausalMapFile:
+    """What a causal map file holds (:meth:`CausalMap.read`)."""
+
+    map: CausalMap
+    occupancy: NDArray[np.float64] | None
+    """The occupancy grid learnt beside the map (None if it was saved without)."""
+    hits: NDArray[np.int64] | None
+    """The grid's hit counts (None if saved without)."""
 
 
 def _number(v: Any) -> bool:

@@ -12,7 +12,7 @@ from numpy.typing import NDArray
 from copi.errors import InvalidArgumentError
 from copi.geometry import ring_angles
 from copi.learning import Capabilities, GrowingNeuralGas
-from copi.online import _kernels
+from copi.online import kernels
 
 __all__ = ["ContextController", "Decision"]
 
@@ -236,7 +236,7 @@ class ContextController:
         out = self._out
         nodes_t, cand, ok = self._nodes_t, self._cand, self._ok
         st = self._no_static if static is None else self._static_shape(static)
-        _kernels.decide(
+        kernels.decide(
             s, st, nodes_t, cand, ok, want[0], want[1], reach, self.guard,
             self._cos, self._sin, self.max_range, out,
         )  # fmt: skip
@@ -253,7 +253,7 @@ class ContextController:
             self.n_unfamiliar += 1
             if self.continual:
                 nodes, cand, ok = self._learn_unfamiliar(s)
-                _kernels.decide(
+                kernels.decide(
                     s, st, np.ascontiguousarray(nodes.T), cand, ok, want[0], want[1], reach,
                     self.guard, self._cos, self._sin, self.max_range, out,
                 )  # fmt: skip
@@ -323,7 +323,7 @@ class ContextController:
         # Screen the nearest-node search with one float32 matrix product (BLAS); the
         # kernel then measures the few close nodes exactly.
         self._gram, sq = screen_products(s, self._screen, self._gram)
-        _kernels.decide_batch(
+        kernels.decide_batch(
             s, np.ascontiguousarray(st), self._nodes_t, self._gram, sq, self._cand, self._ok,
             want, r, self.guard, self._cos, self._sin, self.max_range, out,
         )  # fmt: skip
@@ -404,7 +404,7 @@ def screen_products(
     every reading and node, by one matrix product (BLAS) into ``buf`` when it has the
     shape (b, nodes), and each reading's squared norm; |s|^2 - 2 product approximates
     the squared distance, and the kernels screen with it row by row
-    (:func:`copi.online._kernels._screened_nearest`). Non-finite readings read as 0
+    (:func:`copi.online.kernels._screened_nearest`). Non-finite readings read as 0
     here (the kernels refuse them)."""
     b, dim = s.shape
     s32 = np.empty((b, dim + 1), dtype=np.float32)

@@ -10,9 +10,9 @@ from numpy.typing import NDArray
 
 from copi.core import Agent, Observation, Task
 from copi.errors import InvalidArgumentError
-from copi.learning import Capabilities
-from copi.learning._safety import SafetyModel, kernel_net, template_directions
-from copi.online import _kernels
+from copi.learning import Capabilities, SafetyModel
+from copi.learning.kernels import kernel_net, template_directions
+from copi.online import _learnt_kernels
 from copi.online._agent import Steering
 from copi.online._controller import ContextController, screen_nodes, screen_products
 
@@ -35,7 +35,7 @@ class LearntAgent(Agent):
     symmetry), every compass direction and waiting is scored by the global direction
     and by what the probes taught — the safety network over the reading turned to that
     direction, and the template's prior through the symmetry — and the best one that a
-    hand-written guard allows is taken (see :func:`copi.online._kernels.decide_learnt`).
+    hand-written guard allows is taken (see :func:`copi.online._learnt_kernels.decide_learnt`).
     With ``alpha = beta = 0`` and no waiting this is ``compass-guard`` at the same guard:
     the ablation of everything learnt (the benchmark's compass-guard has its guard tuned
     on its own, docs/tuning.md).
@@ -105,7 +105,7 @@ class LearntAgent(Agent):
         self._screen: NDArray[np.float32] | None = None  # decide_batch's screen, when used
         self._gram: NDArray[np.float32] | None = None
         self._prior = node_priors(capabilities, model)
-        self._compass = _kernels.compass_table(self._prior.shape[1])
+        self._compass = _learnt_kernels.compass_table(self._prior.shape[1])
         n = capabilities.n_rays
         a = 2 * np.pi * np.arange(n) / n
         self._cos, self._sin = np.cos(a), np.sin(a)
@@ -163,7 +163,7 @@ class LearntAgent(Agent):
         prev = s if self._prev is None else self._prev
         static = self._no_static if obs.static is None else obs.static
         out = self._out
-        _kernels.decide_learnt(
+        _learnt_kernels.decide_learnt(
             s, prev, static, self._nodes_t, self._prior, self._net, desired[0], desired[1],
             reach, self.guard, self.alpha, self.beta, self.wait, self._cos, self._sin,
             self.max_range, self._compass, self._feat, self._p, out, self._landmarks,
@@ -255,7 +255,7 @@ class LearntAgent(Agent):
         else:
             gram, sq = np.empty((b, 0), dtype=np.float32), np.zeros(b)
         out = np.empty((b, 5))
-        _kernels.decide_learnt_batch(
+        _learnt_kernels.decide_learnt_batch(
             s, prev, st, self._nodes_t, gram, sq, self._prior, self._net,
             want, np.ascontiguousarray(r), self.guard, self.alpha, self.beta, self.wait,
             self._cos, self._sin, self.max_range, self._compass, self._feat, self._p, out,

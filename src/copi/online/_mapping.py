@@ -12,7 +12,7 @@ from scipy.ndimage import binary_dilation
 from copi.errors import InvalidArgumentError
 from copi.geometry import ring_angles
 from copi.online._causal_kernels import cast_grid
-from copi.planning._grid import GridPlanner
+from copi.planning import GridPlanner
 
 __all__ = ["Mapping"]
 

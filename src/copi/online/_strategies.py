@@ -14,7 +14,7 @@ from numpy.typing import NDArray
 
 from copi.errors import InvalidArgumentError
 from copi.planning import VisibilityGraph, configuration_space, length_error_bound
-from copi.planning._kernels import point_free, segment_free
+from copi.planning.kernels import point_free, segment_free
 from copi.world import World
 
 __all__ = ["GlobalStrategy", "Greedy", "Route", "make_strategy"]

@@ -12,10 +12,12 @@ from __future__ import annotations
 
 from copi.planning._cspace import configuration_space, length_error_bound, shortest_path
 from copi.planning._family_stats import FamilyStats, family_stats, mean_free_width
+from copi.planning._grid import GridPlanner
 from copi.planning._visibility import Plan, VisibilityGraph
 
 __all__ = [
     "FamilyStats",
+    "GridPlanner",
     "Plan",
     "VisibilityGraph",
     "configuration_space",

@@ -9,9 +9,9 @@ import numpy as np
 import shapely
 from shapely.geometry.base import BaseGeometry
 
+from copi._validation import FloatArray, as_discs, as_vector
 from copi.errors import InvalidArgumentError, InvalidQueryError
-from copi.geometry._arrays import FloatArray, as_discs, as_vector
-from copi.geometry._kernels import clearance as _clearance_kernel
+from copi.geometry.kernels import clearance as _clearance_kernel
 from copi.planning._visibility import Plan, VisibilityGraph
 from copi.world import World
 

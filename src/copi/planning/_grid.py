@@ -9,7 +9,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from copi.errors import InvalidArgumentError, InvalidQueryError
-from copi.planning import _kernels
+from copi.planning import kernels
 from copi.planning._visibility import Plan
 
 __all__ = ["GridPlanner"]
@@ -69,7 +69,7 @@ class GridPlanner:
         sx, sy = self._cell(start, "start")
         gx, gy = self._cell(goal, "goal")
         self._query += 1
-        length = _kernels.grid_astar(
+        length = kernels.grid_astar(
             self.free, sx, sy, gx, gy, self._g, self._parent, self._stamp, self._query
         )
         if not math.isfinite(length):

@@ -13,9 +13,9 @@ from numpy.typing import NDArray
 from shapely.geometry import MultiPolygon, Polygon
 from shapely.geometry.base import BaseGeometry
 
+from copi._validation import FloatArray, as_vector
 from copi.errors import InvalidArgumentError, InvalidQueryError
-from copi.geometry._arrays import FloatArray, as_vector
-from copi.planning import _kernels
+from copi.planning import kernels
 
 __all__ = ["Plan", "VisibilityGraph"]
 
@@ -124,11 +124,11 @@ class VisibilityGraph:
             _, first, count = np.unique(xy, axis=0, return_index=True, return_counts=True)
             pins = np.ascontiguousarray(xy[first[count > 1]])
         if len(xy):
-            nodes = _kernels.reflex_vertices(xy, starts)
+            nodes = kernels.reflex_vertices(xy, starts)
             if len(pins):
                 pinned = (np.abs(xy[nodes][:, None, :] - pins[None]).max(-1) <= eps).any(1)
                 nodes = np.ascontiguousarray(nodes[~pinned])
-            ei, ej = _kernels.visibility_edges(xy, starts, nodes, eps, pins)
+            ei, ej = kernels.visibility_edges(xy, starts, nodes, eps, pins)
         else:
             nodes = np.zeros(0, dtype=np.int64)
             ei = ej = np.zeros(0, dtype=np.int64)
@@ -167,7 +167,7 @@ class VisibilityGraph:
     def contains(self, point: Any) -> bool:
         """Whether a point lies in the closed free space."""
         p = as_vector(point, "point", length=2)
-        return bool(_kernels.point_free(p[0], p[1], self.xy, self.starts, self.eps))
+        return bool(kernels.point_free(p[0], p[1], self.xy, self.starts, self.eps))
 
     def shortest_path(self, start: Any, goal: Any, *, snap: float = 0.0) -> Plan:
         """The exact shortest path from ``start`` to ``goal``.
@@ -192,10 +192,10 @@ class VisibilityGraph:
         g = self._free_point(g0, "goal", snap)
         pts = self.points
         xy, st, eps, pins = self.xy, self.starts, self.eps, self.pins
-        s_vis = _kernels.visible_from(s[0], s[1], xy, st, self.nodes, eps, pins)
-        g_vis = _kernels.visible_from(g[0], g[1], xy, st, self.nodes, eps, pins)
-        direct = bool(_kernels.segment_free(s[0], s[1], g[0], g[1], xy, st, eps, pins))
-        length, parent = _kernels.graph_astar(
+        s_vis = kernels.visible_from(s[0], s[1], xy, st, self.nodes, eps, pins)
+        g_vis = kernels.visible_from(g[0], g[1], xy, st, self.nodes, eps, pins)
+        direct = bool(kernels.segment_free(s[0], s[1], g[0], g[1], xy, st, eps, pins))
+        length, parent = kernels.graph_astar(
             np.ascontiguousarray(pts),
             self.indptr,
             self.indices,
@@ -223,14 +223,14 @@ class VisibilityGraph:
         return Plan(path, float(length) + extra)
 
     def _free_point(self, p: FloatArray, name: str, snap: float) -> FloatArray:
-        if _kernels.point_free(p[0], p[1], self.xy, self.starts, self.eps):
+        if kernels.point_free(p[0], p[1], self.xy, self.starts, self.eps):
             return p
         where = shapely.points(p)
         gap = float(shapely.distance(self.geometry, where)) if len(self.xy) else math.inf
         if gap <= snap:
             near = shapely.ops.nearest_points(self.geometry, where)[0]
             q = np.array([near.x, near.y])
-            if _kernels.point_free(q[0], q[1], self.xy, self.starts, self.eps):
+            if kernels.point_free(q[0], q[1], self.xy, self.starts, self.eps):
                 return q
         raise InvalidQueryError(
             f"{name} ({p[0]:.6g}, {p[1]:.6g}) must lie in the free space; "

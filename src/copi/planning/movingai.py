@@ -20,7 +20,7 @@ from shapely.geometry import MultiPolygon, Polygon
 
 from copi.errors import InvalidWorldError, MapFileError
 from copi.world import World
-from copi.world._gridmap import (  # noqa: F401 - re-exported
+from copi.world.gridmap import (  # noqa: F401 - re-exported
     BLOCKED,
     PASSABLE,
     GridMap,
@@ -94,7 +94,7 @@ def map_world(grid: GridMap, *, near: tuple[int, int] | None = None) -> World:
     """A map's free space as a :class:`~copi.world.World`: the connected region holding
     cell ``near`` (the largest region by default), its walls and holes.
 
-    The free space is shrunk by a hair (:func:`~copi.world._gridmap.without_pinches`), so
+    The free space is shrunk by a hair (:func:`~copi.world.gridmap.without_pinches`), so
     that blocked cells touching only at a corner become one hole."""
     geom = without_pinches(free_geometry(grid))
     parts = list(geom.geoms) if isinstance(geom, MultiPolygon) else [geom]

@@ -32,6 +32,7 @@ from copi.world._family_maps import (
     map_window_world,
     maps_identity,
     movingai_dir,
+    scaled_map_world,
 )
 from copi.world._family_polygon import PolygonParams, is_star_shaped, polygon_world
 from copi.world._generate import (
@@ -87,5 +88,6 @@ __all__ = [
     "sample_start_goal",
     "sample_world",
     "save_worlds",
+    "scaled_map_world",
     "unregister_family",
 ]

@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 from copi._rng import Seed, as_generator
-from copi.geometry._arrays import FloatArray
+from copi._validation import FloatArray
 
 __all__ = ["RandomWalk"]
 

@@ -13,8 +13,8 @@ from shapely.geometry import LineString
 
 from copi._plugins import Registry
 from copi._rng import Seed, as_generator
+from copi._validation import as_vector
 from copi.errors import InvalidArgumentError
-from copi.geometry._arrays import as_vector
 from copi.world._family_indoor import indoor_world
 from copi.world._family_maps import MapsParams, map_window_world, maps_identity
 from copi.world._family_polygon import polygon_world

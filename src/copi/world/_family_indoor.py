@@ -9,8 +9,8 @@ import shapely
 from shapely.geometry import Polygon, box
 
 from copi._rng import Seed, as_generator
+from copi._validation import FloatArray
 from copi.errors import InvalidArgumentError
-from copi.geometry._arrays import FloatArray
 from copi.world._world import ObstacleSpec, World
 
 __all__ = ["IndoorParams", "indoor_world"]

@@ -16,8 +16,8 @@ from shapely.geometry import Polygon
 
 from copi._rng import Seed, as_generator
 from copi.errors import InvalidArgumentError, InvalidWorldError
-from copi.world._gridmap import free_geometry, read_map, without_pinches
 from copi.world._world import ObstacleSpec, World
+from copi.world.gridmap import free_geometry, read_map, without_pinches
 
 __all__ = [
     "MOVINGAI_ENV",

@@ -9,8 +9,8 @@ import shapely
 from shapely.geometry import LineString, Polygon
 
 from copi._rng import Seed, as_generator
+from copi._validation import FloatArray
 from copi.errors import InvalidArgumentError, InvalidWorldError
-from copi.geometry._arrays import FloatArray
 from copi.geometry._polygons import signed_area, turned
 from copi.world._world import World
 

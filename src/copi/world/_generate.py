@@ -9,10 +9,10 @@ import shapely
 from shapely.geometry import MultiPolygon, Polygon
 
 from copi._rng import Seed, as_generator
+from copi._validation import FloatArray
 from copi.errors import InvalidArgumentError, InvalidWorldError
-from copi.geometry._arrays import FloatArray
-from copi.geometry._kernels import clearance as _clearance_kernel
 from copi.geometry._polygons import turned
+from copi.geometry.kernels import clearance as _clearance_kernel
 from copi.world._world import ObstacleSpec, World
 
 __all__ = ["WorldParams", "check_task", "place_obstacles", "random_world", "sample_start_goal"]

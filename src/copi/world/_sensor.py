@@ -7,9 +7,9 @@ from typing import Any
 
 import numpy as np
 
+from copi._validation import FloatArray, positive_int
 from copi.errors import InvalidArgumentError
 from copi.geometry import cast_rays, ring_angles
-from copi.geometry._arrays import FloatArray, positive_int
 from copi.world._world import World
 
 __all__ = ["RangeSensor"]

@@ -9,9 +9,9 @@ from typing import Any
 import numpy as np
 
 from copi._rng import Seed, as_generator
+from copi._validation import FloatArray, as_vector, positive
 from copi.errors import InvalidArgumentError
-from copi.geometry._arrays import FloatArray, as_vector, positive
-from copi.geometry._kernels import step_world
+from copi.geometry.kernels import step_world
 from copi.world._generate import place_obstacles, sample_start_goal
 from copi.world._sensor import RangeSensor
 from copi.world._world import ObstacleSpec, World

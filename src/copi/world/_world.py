@@ -12,9 +12,9 @@ import numpy as np
 import shapely
 from shapely.geometry import LinearRing, Polygon
 
+from copi._validation import FloatArray, as_vector
 from copi.errors import CopiError, InvalidWorldError
 from copi.geometry import as_ring, clearance, orient, ring_crossings, ring_segments
-from copi.geometry._arrays import FloatArray, as_vector
 
 __all__ = ["ObstacleSpec", "World"]
 

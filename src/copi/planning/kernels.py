@@ -26,7 +26,7 @@ SQRT2 = math.sqrt(2.0)
 
 
 @njit(cache=True, inline="always")
-def _heap_push(keys, items, size, key, item):  # type: ignore[no-untyped-def]
+def heap_push(keys, items, size, key, item):  # type: ignore[no-untyped-def]
     i = size
     keys[i] = key
     items[i] = item
@@ -41,7 +41,7 @@ def _heap_push(keys, items, size, key, item):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True, inline="always")
-def _heap_room(keys, items, size):  # type: ignore[no-untyped-def]
+def heap_room(keys, items, size):  # type: ignore[no-untyped-def]
     """(keys, items) with room for one more entry: the same arrays, or twice as large."""
     if size < keys.shape[0]:
         return keys, items
@@ -53,7 +53,7 @@ def _heap_room(keys, items, size):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True, inline="always")
-def _heap_pop(keys, items, size):  # type: ignore[no-untyped-def]
+def heap_pop(keys, items, size):  # type: ignore[no-untyped-def]
     key = keys[0]
     item = items[0]
     size -= 1
@@ -99,9 +99,9 @@ def grid_astar(free, sx, sy, gx, gy, g, parent, stamp, query):  # type: ignore[n
     g[start] = 0.0
     parent[start] = -1
     stamp[start] = query
-    size = _heap_push(keys, items, 0, _octile(sx, sy, gx, gy), start)
+    size = heap_push(keys, items, 0, _octile(sx, sy, gx, gy), start)
     while size > 0:
-        key, u, size = _heap_pop(keys, items, size)
+        key, u, size = heap_pop(keys, items, size)
         if stamp[u] == -query:
             continue
         if u == goal:
@@ -131,8 +131,8 @@ def grid_astar(free, sx, sy, gx, gy, g, parent, stamp, query):  # type: ignore[n
                     g[v] = cand
                     parent[v] = u
                     stamp[v] = query
-                    keys, items = _heap_room(keys, items, size)
-                    size = _heap_push(keys, items, size, cand + _octile(vx, vy, gx, gy), v)
+                    keys, items = heap_room(keys, items, size)
+                    size = heap_push(keys, items, size, cand + _octile(vx, vy, gx, gy), v)
     return np.inf
 
 
@@ -366,15 +366,15 @@ def graph_astar(pts, indptr, indices, weights, s_vis, g_vis, sx, sy, gx, gy, dir
         d = math.hypot(gx - sx, gy - sy)
         g[n] = d
         parent[n] = -1
-        size = _heap_push(keys, items, size, d, n)
+        size = heap_push(keys, items, size, d, n)
     for v in range(n):
         if s_vis[v]:
             d = math.hypot(pts[v, 0] - sx, pts[v, 1] - sy)
             g[v] = d
             parent[v] = -1
-            size = _heap_push(keys, items, size, d + math.hypot(gx - pts[v, 0], gy - pts[v, 1]), v)
+            size = heap_push(keys, items, size, d + math.hypot(gx - pts[v, 0], gy - pts[v, 1]), v)
     while size > 0:
-        _, u, size = _heap_pop(keys, items, size)
+        _, u, size = heap_pop(keys, items, size)
         if closed[u]:
             continue
         if u == n:
@@ -387,14 +387,14 @@ def graph_astar(pts, indptr, indices, weights, s_vis, g_vis, sx, sy, gx, gy, dir
             if cand < g[n]:
                 g[n] = cand
                 parent[n] = u
-                size = _heap_push(keys, items, size, cand, n)
+                size = heap_push(keys, items, size, cand, n)
         for e in range(indptr[u], indptr[u + 1]):
             v = indices[e]
             cand = g[u] + weights[e]
             if cand < g[v]:
                 g[v] = cand
                 parent[v] = u
-                size = _heap_push(
+                size = heap_push(
                     keys, items, size, cand + math.hypot(gx - pts[v, 0], gy - pts[v, 1]), v
                 )
     return np.inf, parent

@@ -126,7 +126,7 @@ TANGENT = 1e-7
 
 
 @njit(cache=True, inline="always")
-def _sweep_one(ox, oy, dx, dy, segs, r):  # type: ignore[no-untyped-def]
+def sweep_one(ox, oy, dx, dy, segs, r):  # type: ignore[no-untyped-def]
     """Distance a disc of radius r at o can travel along the unit vector d before it
     touches a segment, or inf. Only entering contacts count, so a disc resting against a
     wall may slide along it or leave it."""
@@ -190,14 +190,14 @@ STOP_GAP = 1e-9
 
 
 @njit(cache=True, inline="always")
-def _move_one(ox, oy, vx, vy, segs, r):  # type: ignore[no-untyped-def]
+def move_one(ox, oy, vx, vy, segs, r):  # type: ignore[no-untyped-def]
     """Move a disc by (vx, vy), stopping it at the first wall; returns (x, y, blocked)."""
     length = math.sqrt(vx * vx + vy * vy)
     if length == 0.0:
         return ox, oy, False
     dx = vx / length
     dy = vy / length
-    free = _sweep_one(ox, oy, dx, dy, segs, r)
+    free = sweep_one(ox, oy, dx, dy, segs, r)
     if free >= length:
         return ox + vx, oy + vy, False
     step = max(free - STOP_GAP, 0.0)
@@ -208,7 +208,7 @@ def _move_one(ox, oy, vx, vy, segs, r):  # type: ignore[no-untyped-def]
 def move(positions, velocities, segs, r, out):  # type: ignore[no-untyped-def]
     """Move each disc (row) by its velocity; ``out[b] = (x, y, blocked)``."""
     for b in range(positions.shape[0]):
-        x, y, blocked = _move_one(
+        x, y, blocked = move_one(
             positions[b, 0], positions[b, 1], velocities[b, 0], velocities[b, 1], segs, r
         )
         out[b, 0] = x
@@ -249,7 +249,7 @@ def clearance(points, segs, out):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True, inline="always")
-def _closest_approach(ax, ay, adx, ady, bx, by, bdx, bdy):  # type: ignore[no-untyped-def]
+def closest_approach(ax, ay, adx, ady, bx, by, bdx, bdy):  # type: ignore[no-untyped-def]
     """Least distance between two points moving linearly over t in [0, 1]."""
     px = ax - bx
     py = ay - by
@@ -302,7 +302,7 @@ def step_world(  # type: ignore[no-untyped-def]
                 h = 2.0 * math.pi * retry[k, j - 1]
             dx = math.cos(h)
             dy = math.sin(h)
-            if _sweep_one(centers[k, 0], centers[k, 1], dx, dy, segs, radii[k]) >= speed:
+            if sweep_one(centers[k, 0], centers[k, 1], dx, dy, segs, radii[k]) >= speed:
                 centers[k, 0] += speed * dx
                 centers[k, 1] += speed * dy
                 moved = True
@@ -310,12 +310,12 @@ def step_world(  # type: ignore[no-untyped-def]
         headings[k] = h if moved else headings[k]
     ax0 = agent[0]
     ay0 = agent[1]
-    x, y, blocked = _move_one(ax0, ay0, action[0], action[1], segs, agent_radius)
+    x, y, blocked = move_one(ax0, ay0, action[0], action[1], segs, agent_radius)
     agent[0] = x
     agent[1] = y
     min_gap = np.inf
     for k in range(n_obs):
-        d = _closest_approach(
+        d = closest_approach(
             ax0,
             ay0,
             x - ax0,
@@ -330,3 +330,57 @@ def step_world(  # type: ignore[no-untyped-def]
             min_gap = gap
     _scan_into(x, y, cos, sin, segs, centers, radii, max_range, ranges)
     return blocked, min_gap < 0.0, min_gap
+
+
+# -- the moves of a disc agent: which walls let through, which escape the discs --------
+
+
+@njit(cache=True)
+def local_segments(x, y, segs, reach):  # type: ignore[no-untyped-def]
+    """The segments within ``reach`` of (x, y): the only ones a move shorter than
+    ``reach`` minus the disc's radius can touch."""
+    n = 0
+    keep = np.empty(segs.shape[0], dtype=np.int64)
+    r2 = reach * reach
+    for k in range(segs.shape[0]):
+        if point_segment_d2(x, y, segs, k) <= r2:
+            keep[n] = k
+            n += 1
+    out = np.empty((n, 4))
+    for i in range(n):
+        out[i] = segs[keep[i]]
+    return out
+
+
+@njit(cache=True, inline="always")
+def free_moves(qx, qy, r, segs, moves, free, room):  # type: ignore[no-untyped-def]
+    """``free[c]``: whether the walls ``segs`` let an agent of radius ``r`` at (qx, qy)
+    make move ``moves[c]`` whole with ``room`` to spare (waiting always)."""
+    for c in range(moves.shape[0]):
+        ex = moves[c, 0]
+        ey = moves[c, 1]
+        le = math.sqrt(ex * ex + ey * ey)
+        free[c] = le == 0.0 or sweep_one(qx, qy, ex / le, ey / le, segs, r) >= le + room
+
+
+@njit(cache=True, inline="always")
+def escapes(qx, qy, r, moves, free, c1, c2, radii, near, n_near, clear):  # type: ignore[no-untyped-def]
+    """Whether some move ``moves[c]`` with ``free[c]`` (:func:`free_moves`) passes every
+    disc ``near[:n_near]``, moving linearly from ``c1`` to ``c2`` (radii ``radii``), with
+    ``clear`` to spare: the escape the model-oracle asks (``copi.bounds``) of a first move's end."""
+    for c in range(moves.shape[0]):
+        if not free[c]:
+            continue
+        ok = True
+        for a in range(n_near):
+            k = near[a]
+            cx = c1[k, 0]
+            cy = c1[k, 1]
+            gap = closest_approach(qx, qy, moves[c, 0], moves[c, 1], cx, cy, c2[k, 0] - cx,
+                                    c2[k, 1] - cy)  # fmt: skip
+            if gap - r - radii[k] < clear:
+                ok = False
+                break
+        if ok:
+            return True
+    return False

@@ -16,11 +16,10 @@ from pathlib import Path
 import numpy as np
 
 from benchmarks._timing import Timing, fmt, show
-from copi.experiments._episode import optimal_to_goal, run_episode
 from copi.experiments.benchmark import benchmark_max_steps, ensure_capabilities
-from copi.experiments.methods import make_agent, method_names, method_spec
-from copi.experiments.navigation import draw_episode
 from copi.learning import Capabilities
+from copi.methods import make_agent, method_names, method_spec
+from copi.runs import draw_episode, optimal_to_goal, run_episode
 
 
 def main() -> bool:

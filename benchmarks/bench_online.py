@@ -20,8 +20,8 @@ import numpy as np
 
 from benchmarks._timing import Timing, median_time, note, report
 from copi.experiments import NavigationConfig, evaluate
-from copi.experiments.methods import make_agent
 from copi.learning import LearnParams, explore, learn
+from copi.methods import make_agent
 from copi.online import ContextController, LearntAgent
 
 

@@ -12,10 +12,11 @@ from __future__ import annotations
 import numpy as np
 
 from benchmarks._timing import Timing, median_time, note, report
+from copi.envs.navigation import NavigationEnv
 from copi.geometry import cast_rays
 from copi.geometry.kernels import scan
 from copi.geometry.reference import cast_rays_numpy, cast_rays_shapely
-from copi.world import NavigationEnv, RangeSensor, WorldParams, random_world, sample_start_goal
+from copi.world import RangeSensor, WorldParams, random_world, sample_start_goal
 
 
 def scene() -> tuple:

@@ -52,10 +52,11 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--out", default="docs/ceilings.md")
     a = ap.parse_args()
-    from copi.experiments.benchmark_report import paired_difference, read_benchmark
+    from copi.reports import read_benchmark
+    from copi.results import paired_difference
 
     bench = Path(a.bench)
-    from copi.experiments.methods import method_spec
+    from copi.methods import method_spec
 
     methods = [m for m in METHODS if method_spec(m).available()]
     # wall times of the runs that did the work (a rerun that only resumes keeps them)

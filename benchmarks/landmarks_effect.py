@@ -32,9 +32,8 @@ import numpy as np
 from scipy import stats
 
 from copi.experiments import BenchmarkConfig, NavigationConfig, evaluate, run_benchmark
-from copi.experiments.benchmark_report import _diff, _pair
-from copi.experiments.presets import PRESETS
-from copi.experiments.store import ResultsStore
+from copi.methods import PRESETS
+from copi.results import ResultsStore, format_difference, pair_episodes
 
 
 def _learn_into(name: str, seed: int, extra: dict, path: Path, workers: int) -> Any:
@@ -94,11 +93,12 @@ def main() -> None:
         rows = {}
         for rule in ("new", "old"):
             rows[rule] = _experiment1(caps[rule][name], name, tmp / f"e1-{rule}-{name}.sqlite", a)
-        ds, de = _pair(rows["new"], rows["old"])
+        ds, de = pair_episodes(rows["new"], rows["old"])
         sn = sum(r.outcome == "success" for r in rows["new"]) / len(rows["new"])
         so = sum(r.outcome == "success" for r in rows["old"]) / len(rows["old"])
         lines.append(f"| {PRESETS[name].method} | {len(rows['new'])} | {100 * sn:.1f} % | "
-                     f"{100 * so:.1f} % | {_diff(ds)} | {_diff(de)} |")  # fmt: skip
+                     f"{100 * so:.1f} % | {format_difference(ds)} "
+                     f"| {format_difference(de)} |")  # fmt: skip
     lines += ["", f"## Benchmark rows ({a.episodes} episodes per family)", "",
               "| family | method | sensing | success now | success 0.2 | Δ success "
               "| Δ median excess |", "|---|---|---|---|---|---|---|"]  # fmt: skip
@@ -115,11 +115,11 @@ def main() -> None:
                 by.setdefault(rule, {}).setdefault((r.family, r.method, r.sensing), []).append(r)
     for key in sorted(by["new"], key=lambda k: (k[0], arms.index(k[1]), k[2])):
         new, old = by["new"][key], by["old"][key]
-        ds, de = _pair(new, old)
+        ds, de = pair_episodes(new, old)
         sn = sum(r.outcome == "success" for r in new) / len(new)
         so = sum(r.outcome == "success" for r in old) / len(old)
         lines.append(f"| {key[0]} | {key[1]} | {key[2]} | {100 * sn:.1f} % | {100 * so:.1f} % "
-                     f"| {_diff(ds)} | {_diff(de)} |")  # fmt: skip
+                     f"| {format_difference(ds)} | {format_difference(de)} |")  # fmt: skip
     if len(seeds) > 1:
         lines += over_seeds(seeds, a, tmp)
     lines += ["", f"({time.perf_counter() - t0:.0f} s on {a.workers} workers.)", ""]

@@ -58,7 +58,7 @@ def _compare(
 ) -> tuple[str, str, bool]:
     """a − b in points on the common episodes with its interval, who is better (named only
     where the interval excludes 0), and whether a is."""
-    from copi.experiments.benchmark_report import paired_difference
+    from copi.results import paired_difference
 
     common = sorted(set(a) & set(b))
     d = paired_difference([a[k] for k in common], [b[k] for k in common])
@@ -78,10 +78,8 @@ def run_benchmark(bench: Path, episodes: int, workers: int) -> None:
 def episodes_won(agent_of: Any, family: str, level: str, episodes: int) -> dict[str, bool]:
     """Success of ``agent_of()`` (a fresh agent an episode) on the benchmark's episodes
     0 .. episodes-1 of ``family`` (seed 0) at ``level``, with the benchmark's step limit."""
-    from copi.experiments import run_episode
-    from copi.experiments._episode import optimal_to_goal
     from copi.experiments.benchmark import benchmark_max_steps
-    from copi.experiments.navigation import draw_episode
+    from copi.runs import draw_episode, optimal_to_goal, run_episode
 
     won = {}
     for k in range(episodes):
@@ -106,8 +104,8 @@ def variant(bench: Path, name: str, params: dict, episodes: int,
     """copi-learnt with capabilities learnt with ``LearnParams(**params)``: success per
     (family, level) on the benchmark's episodes, its rate, and the capabilities file
     (both cached in ``bench``)."""
-    from copi.experiments import make_agent
     from copi.learning import Capabilities, LearnParams, learn
+    from copi.methods import make_agent
 
     path = bench / f"capabilities-learnt-{name}.npz"
     if not path.is_file():
@@ -196,8 +194,8 @@ def play_games(caps: Path, games: int, cache: Path) -> dict[str, dict[int, bool]
 
 def copi_validation(caps_path: Path, policies: dict[str, dict]) -> dict[str, float]:
     """copi-learnt's success on each PPO configuration's validation episodes."""
-    from copi.experiments.methods import make_agent
     from copi.learning import Capabilities
+    from copi.methods import make_agent
     from copi.rl._train import TrainConfig, validation_success
 
     caps = Capabilities.load(caps_path)
@@ -262,8 +260,9 @@ def main() -> None:
     ap.add_argument("--out", default="docs/rl.md")
     a = ap.parse_args()
     from copi.baselines._ppo import packaged_policy
-    from copi.experiments.benchmark_report import read_benchmark, summarize_rows
     from copi.experiments.pursuit import PursuitConfig
+    from copi.reports import read_benchmark
+    from copi.results import summarize_rows
 
     bench = Path(a.bench)
     t0 = time.perf_counter()

@@ -106,9 +106,9 @@ def _visible(sim: Any) -> np.ndarray:
 
 def _visit(args: tuple[str, int, int, float, float, int, bool]) -> dict[str, Any]:
     """copi-learnt through one episode, each decision's state probed."""
-    from copi.experiments import make_agent, run_episode
-    from copi.experiments.navigation import draw_episode
     from copi.learning._safety import _probe_row
+    from copi.methods import make_agent
+    from copi.runs import draw_episode, run_episode
 
     caps_path, k, seed, alpha, guard, futures, decompose = args
     caps = _setup(caps_path)
@@ -138,10 +138,10 @@ def _visit(args: tuple[str, int, int, float, float, int, bool]) -> dict[str, Any
 
 def _choose(args: tuple[str, int, int, str, float, float, int]) -> bool:
     """One validation episode with the simplified rule, P from ``source``."""
-    from copi.experiments import make_agent, run_episode
-    from copi.experiments.navigation import draw_episode
     from copi.learning.kernels import safety_probabilities
+    from copi.methods import make_agent
     from copi.online import kernels
+    from copi.runs import draw_episode, run_episode
 
     caps_path, k, seed, source, alpha, guard, futures = args
     caps = _setup(caps_path)

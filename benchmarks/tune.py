@@ -21,11 +21,10 @@ from pathlib import Path
 
 import numpy as np
 
-from copi.experiments import optimal_to_goal, run_episode
 from copi.experiments.benchmark import benchmark_max_steps, ensure_capabilities
-from copi.experiments.methods import make_agent, method_spec
-from copi.experiments.navigation import draw_episode
 from copi.learning import Capabilities
+from copi.methods import make_agent, method_spec
+from copi.runs import draw_episode, optimal_to_goal, run_episode
 
 GRID: dict[str, list[dict[str, float]]] = {
     "copi-extended": [{"guard": g} for g in (0.9, 1.05, 1.2, 1.4)],

@@ -25,7 +25,7 @@ U_TRAP = World(
     start=[20, 15],
     goal=[20, 28],
 )
-"""DESIGN.md's example: the start sits inside a U that opens towards the goal."""
+"""The design page's example: the start sits inside a U that opens towards the goal."""
 
 PILLARS = World(
     [[0, 0], [30, 0], [30, 30], [0, 30]],

@@ -11,16 +11,14 @@ import pytest
 from scipy import stats
 
 from copi.baselines import CompassGuard, Straight
-from copi.ceilings import TURN_SD, Clairvoyant, GoalField, ModelOracle
-from copi.ceilings._kernels import hindsight_values, sample_futures
-from copi.ceilings._model_oracle import _OFFSETS
+from copi.bounds import TURN_SD, Clairvoyant, GoalField, ModelOracle
+from copi.bounds._kernels import hindsight_values, sample_futures
+from copi.bounds._model_oracle import _OFFSETS
 from copi.core import check_sensing
 from copi.errors import InvalidArgumentError
-from copi.experiments import make_task, run_episode
-from copi.experiments._episode import obstacle_future
-from copi.experiments.methods import method_spec
-from copi.experiments.navigation import draw_episode
 from copi.geometry import clearance
+from copi.methods import method_spec
+from copi.runs import draw_episode, make_task, obstacle_future, run_episode
 from copi.world import ObstacleSpec, Simulator, World
 
 

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from copi.experiments import method_names, register_method, unregister_method
+from copi.methods import method_names, register_method, unregister_method
 from copi.testing import check_agent
 from copi.world import family_names, register_family, sample_world, unregister_family
 from tests.cli.test_faults import _one_line_error, run
@@ -78,7 +78,7 @@ def test_a_later_run_keeps_the_method_in_the_report(
 def test_registering_in_python_is_one_call(tmp_path: Path) -> None:
     from copi.core import Agent
     from copi.experiments import BenchmarkConfig, run_benchmark
-    from copi.experiments.benchmark_report import write_benchmark_report
+    from copi.reports import write_benchmark_report
     from copi.world import World
 
     class Still(Agent):

@@ -22,9 +22,8 @@ SCRIPT = r"""
 import hashlib, json
 import numpy as np
 from copi.baselines import CompassGuard
-from copi.baselines._ppo import PolicyWeights
-from copi.experiments._episode import run_episode
-from copi.experiments.navigation import draw_episode
+from copi.baselines import PolicyWeights
+from copi.runs import draw_episode, run_episode
 from copi.learning import LearnParams, explore, learn
 from copi.online import ContextController, LearntAgent
 

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from copi.core import Agent
-from copi.experiments.methods import method_names, method_spec
 from copi.learning import Capabilities, LearnParams, learn
+from copi.methods import method_names, method_spec
 from copi.testing import AgentCheckError, check_agent
 
 
@@ -41,7 +41,7 @@ def test_every_built_in_method_passes(name: str, caps: dict[str, Any]) -> None:
 
 def test_the_continual_method_passes_as_a_fresh_agent_per_run(caps: dict[str, Any]) -> None:
     # it grows contexts as it goes: two fresh agents act the same on the same episode
-    from copi.experiments.methods import make_agent
+    from copi.methods import make_agent
 
     check_agent(lambda: make_agent("copi-learnt-continual", caps["learnt"]), episodes=2,
                 max_steps=40)  # fmt: skip

@@ -11,11 +11,11 @@ import pytest
 from shapely.geometry import Point
 
 from copi.baselines import DiscTracker, TrackedMPC
-from copi.ceilings import ModelOracle
-from copi.ceilings._kernels import sample_futures
+from copi.bounds import ModelOracle
+from copi.bounds._kernels import sample_futures
 from copi.errors import InvalidArgumentError
-from copi.experiments import make_agent, run_episode
-from copi.experiments._episode import make_task
+from copi.methods import make_agent
+from copi.runs import make_task, run_episode
 from copi.world import RangeSensor, Simulator, World
 
 ROOM = World([[0, 0], [40, 0], [40, 40], [0, 40]])

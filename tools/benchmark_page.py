@@ -24,7 +24,7 @@ FIGURE = "benchmark_success_excess.png"
 def write_page(store: Path, page: Path, what: str, command: str) -> Path:
     """``store``'s benchmark report as ``page`` (see the module)."""
     sys.path.insert(0, str(ROOT / "src"))
-    from copi.experiments.benchmark_report import write_benchmark_report
+    from copi.reports import write_benchmark_report
 
     with tempfile.TemporaryDirectory() as tmp:
         text = write_benchmark_report(store / "benchmark.sqlite", tmp).read_text()

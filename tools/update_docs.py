@@ -3,7 +3,7 @@
     python tools/update_docs.py
 
 - between ``<!-- methods ... -->`` and ``<!-- /methods -->``: the registry's table of
-  methods (:func:`copi.experiments.methods.methods_markdown`);
+  methods (:func:`copi.methods.methods_markdown`);
 - between ``<!-- results ... -->`` and ``<!-- /results -->`` (README only): the headline
   rows, each quoted whole from the generated results page it names (``RESULTS`` below);
 - between ``<!-- quote-text PAGE#SECTION -->`` and ``<!-- /quote-text -->``: the
@@ -165,7 +165,7 @@ PAGES = ("README.md", "docs/concepts/pipeline.md", "docs/analysis/benchmark.md",
 
 
 def generated(path: Path) -> str:
-    from copi.experiments.methods import methods_markdown
+    from copi.methods import methods_markdown
 
     text = path.read_text()
     if "<!-- methods" in text:

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from importlib.metadata import PackageNotFoundError, version
 
-from copi._registration import register_envs
+from copi.envs.registration import register_envs
 
 try:
     __version__ = version("copi")

@@ -13,6 +13,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import io
 import os
 import tempfile
@@ -31,6 +32,7 @@ __all__ = [
     "atomic_write",
     "check_outputs",
     "file_kind",
+    "file_sha",
     "save_figure",
     "write_npz",
     "write_text",
@@ -261,3 +263,12 @@ def write_npz(path: str | os.PathLike[str], arrays: Mapping[str, Any]) -> Path:
                     np.lib.format.write_array(member, np.asarray(arr), allow_pickle=False)
 
     return atomic_write(path, write, "npz")
+
+
+def file_sha(path: str | os.PathLike[str]) -> str:
+    """The SHA-256 of a file's content (read in blocks)."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()

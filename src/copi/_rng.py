@@ -1,4 +1,5 @@
-"""The one seeding idiom of copi (STYLE.md §5)."""
+"""The one seeding idiom of copi: every random callable takes ``seed`` (an int or a
+``numpy.random.Generator``), normalised here."""
 
 from __future__ import annotations
 

@@ -1,7 +1,10 @@
-"""Validation of array arguments: one clear message per mistake."""
+"""Checks of arguments every part shares: arrays, counts, numbers. One clear message per
+mistake, saying what was expected and what was found."""
 
 from __future__ import annotations
 
+import math
+import numbers
 from typing import Any
 
 import numpy as np
@@ -137,3 +140,22 @@ def check_finite(arr: NDArray[Any], name: str) -> None:
         raise InvalidArgumentError(
             f"{name} must be finite; found {arr[tuple(idx)]} at index {where}"
         )
+
+
+def check_count(value: int, name: str, most: int) -> int:
+    """``value`` if it is at most ``most``; otherwise one clear error (a count beyond it
+    is a typing error, refused before any work starts)."""
+    if value > most:
+        raise InvalidArgumentError(
+            f"{name} must be at most {most:,} (a run of more would take days and the memory "
+            f"of its bookkeeping); got {value:,}"
+        )
+    return value
+
+
+def non_negative(value: Any, name: str) -> float:
+    """``value`` as a finite float >= 0 (bools refused)."""
+    ok = isinstance(value, numbers.Real) and not isinstance(value, bool)
+    if not ok or not math.isfinite(value) or value < 0:
+        raise InvalidArgumentError(f"{name} must be a finite number >= 0; got {value!r}")
+    return float(value)

@@ -19,10 +19,9 @@ from pathlib import Path
 
 def main() -> None:
     from copi.experiments.benchmark import BenchmarkConfig, run_benchmark
-    from copi.experiments.methods import method_spec, parse_methods
-    from copi.experiments.presets import PRESETS
     from copi.experiments.pursuit import PursuitConfig, pursue
     from copi.learning import learn
+    from copi.methods import PRESETS, method_spec, parse_methods
 
     t0 = time.perf_counter()
     print("copi: compiling kernels once (numba), about 30 s", file=sys.stderr, flush=True)
@@ -44,11 +43,8 @@ def main() -> None:
             capabilities=paths,
         )  # fmt: skip
         run_benchmark(config, d / "bench.sqlite")
-        from copi.experiments.lifelong import (
-            LifelongConfig,
-            parse_lifelong_methods,
-            run_lifelong,
-        )
+        from copi.experiments.lifelong import LifelongConfig, run_lifelong
+        from copi.methods import parse_lifelong_methods
 
         run_lifelong(
             LifelongConfig(str(caps_path), family="indoor", worlds=1, tasks=1,

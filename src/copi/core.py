@@ -54,13 +54,13 @@ if TYPE_CHECKING:  # the interface needs the type only
     from copi.world import World
 
 __all__ = [
+    "Agent",
     "EXPLAINED",
     "OUTCOMES",
-    "SENSING_LEVELS",
-    "SENSOR_STRATEGIES",
-    "Agent",
     "Observation",
     "Outcome",
+    "SENSING_LEVELS",
+    "SENSOR_STRATEGIES",
     "Sensing",
     "Task",
     "check_sensing",

@@ -167,7 +167,7 @@ def check_agent(
     - act the same in two runs of the same episode (determinism from the seed).
     """
     if isinstance(agent, str):
-        from copi.experiments.methods import make_agent
+        from copi.methods import make_agent
 
         name = agent
 
@@ -202,7 +202,7 @@ def check_agent(
     chosen = list(SENSING_LEVELS[own:]) if levels is None else list(levels)
     for lv in chosen:
         check_sensing(lv, first.sensing, method=first.name)
-    from copi.experiments import run_episode
+    from copi.runs import run_episode
 
     base = _episodes(seed, episodes)
     for level in chosen:

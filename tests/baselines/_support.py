@@ -11,9 +11,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from copi.core import Agent, Observation, Task
-from copi.experiments._episode import EpisodeOutcome, run_episode
-from copi.experiments.methods import make_agent
+from copi.methods import make_agent
 from copi.planning import shortest_path
+from copi.runs import EpisodeOutcome, run_episode
 from copi.world import Simulator, StepResult, World
 from tests.common import SQUARE_ROOM
 

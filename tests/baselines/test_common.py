@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from copi.core import Observation, Task
-from copi.experiments._episode import make_task, run_episode
-from copi.experiments.methods import make_agent
+from copi.methods import make_agent
+from copi.runs import make_task, run_episode
 from copi.world import Simulator
 from tests.baselines._support import (
     EMPTY_PAIRS,

@@ -9,8 +9,8 @@ import pytest
 
 from copi.baselines import NavgroundAgent, NavgroundMissingError, navground_available
 from copi.errors import InvalidArgumentError
-from copi.experiments._episode import make_task, run_episode
-from copi.experiments.methods import make_agent, method_spec
+from copi.methods import make_agent, method_spec
+from copi.runs import make_task, run_episode
 from copi.world import Simulator
 from tests.baselines._support import EMPTY_PAIRS, empty, head_on, run
 from tests.common import PILLARS

@@ -6,8 +6,8 @@ import pytest
 
 from copi.baselines import Replan
 from copi.errors import InvalidArgumentError
-from copi.experiments._episode import make_task, run_episode
-from copi.experiments.methods import make_agent, parse_methods
+from copi.methods import make_agent, parse_methods
+from copi.runs import make_task, run_episode
 from copi.world import Simulator
 from tests.baselines._support import EMPTY_PAIRS, TRAP_GOAL, empty, head_on, route_length, run
 from tests.common import PILLARS, U_TRAP

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from copi.baselines import VFH
-from copi.experiments._episode import make_task
+from copi.runs import make_task
 from tests.baselines._support import empty, run
 from tests.common import WALL
 

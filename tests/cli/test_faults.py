@@ -187,7 +187,7 @@ def test_ctrl_c_stops_cleanly_and_says_how_to_resume(tmp_path: Path, workers: st
 WORKERS_SCRIPT = textwrap.dedent(
     """
     import time
-    from copi.experiments.executor import make_executor
+    from copi.runs import make_executor
 
     with make_executor(2) as pool:
         pids = pool.map(__import__("os").getpid, [None] * 0)  # start the pool
@@ -209,7 +209,7 @@ def _alive(pid: int) -> bool:
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
 def test_an_interrupted_pool_stops_its_workers_at_once() -> None:
-    from copi.experiments.executor import make_executor
+    from copi.runs import make_executor
 
     t0 = time.monotonic()
     with pytest.raises(KeyboardInterrupt), make_executor(2) as pool:

@@ -29,7 +29,7 @@ def _snapshot(directory: Path) -> dict[str, str]:
 
 
 def _store(path: Path) -> Path:
-    from copi.experiments.store import ResultsStore
+    from copi.results import ResultsStore
 
     ResultsStore(path).close()
     return path
@@ -350,8 +350,8 @@ def test_bad_maps_are_refused_in_one_line(text: str, message: str, tmp_path: Pat
     ],
 )
 def test_the_chauffeur_env_refuses_wrong_actions(actions, message: str) -> None:
+    from copi.envs.chauffeur import parallel_env
     from copi.errors import InvalidArgumentError
-    from copi.games import parallel_env
 
     env = parallel_env()
     env.reset(seed=0)

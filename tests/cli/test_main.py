@@ -246,7 +246,7 @@ def test_presets_set_a_mode_whole(tmp_path: Path, capsys: pytest.CaptureFixture[
     with sqlite3.connect(results) as db:
         config = json.loads(db.execute("SELECT config FROM runs").fetchone()[0])
     assert config["method"] == "copi-extended" and config["guard"] is None  # the method's
-    from copi.experiments.methods import method_spec
+    from copi.methods import method_spec
 
     assert method_spec("copi-extended").params["guard"] == 1.05
     code, out, err = run(["pursuit", str(caps), "-o", str(tmp_path / "g.sqlite"), "--games",
@@ -293,7 +293,7 @@ def test_reproduce_into_a_directory_of_another_run_says_what_to_do(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch
 ) -> None:
     import copi.experiments._reproduce as commands
-    from copi.experiments.store import ResultsStore
+    from copi.results import ResultsStore
 
     def clash(output: Path, quick: bool, workers: int, seed: int, tasks: object) -> None:
         with ResultsStore(output / "experiment1.sqlite") as store:  # as a --quick run left it

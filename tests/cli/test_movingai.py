@@ -44,7 +44,7 @@ def test_a_moving_ai_map_scaled_for_disc_agents(
 
 
 def test_a_run_that_mostly_stands_still_says_so(tmp_path: Path) -> None:
-    from copi.experiments.report import warnings_for
+    from copi.reports import warnings_for
 
     assert warnings_for("m", {"no_policy": 0.77, "unfamiliar": 0.0})[0].startswith(
         "m commanded no motion in 77 % of steps"

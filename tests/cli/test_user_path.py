@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from copi.experiments.store import ResultsStore
+from copi.results import ResultsStore
 from tests.cli.test_faults import ENV, _one_line_error, run
 
 # a 20 x 10 room cut in two by a wall at x = 10, with a door of width `door` at y = 5

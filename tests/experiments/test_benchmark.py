@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 
 from copi.experiments.benchmark import BenchmarkConfig, benchmark_max_steps, run_benchmark
-from copi.experiments.benchmark_report import paired_difference, write_benchmark_report
-from copi.experiments.methods import MethodRun, parse_methods
-from copi.experiments.store import ResultsStore
 from copi.learning import LearnParams, learn
+from copi.methods import MethodRun, parse_methods
+from copi.reports import write_benchmark_report
+from copi.results import ResultsStore, paired_difference
 from tests.cli.test_main import run
 
 TIMINGS = {"decision_us", "strategy_us"}
@@ -213,8 +213,8 @@ def test_stale_capabilities_are_refused_not_reused(
 
     import copi.experiments.benchmark as bm
     from copi.errors import InvalidArgumentError
-    from copi.experiments.presets import PRESETS
     from copi.learning import LearnParams
+    from copi.methods import PRESETS
 
     def learns(params: LearnParams) -> None:
         monkeypatch.setitem(PRESETS, "faithful", dataclasses.replace(PRESETS["faithful"],
@@ -233,16 +233,16 @@ def test_stale_capabilities_are_refused_not_reused(
 
 
 def test_intervals_are_printed_for_what_they_are() -> None:
-    from copi.experiments.benchmark_report import _diff
+    from copi.results import format_difference
 
     spread = paired_difference([1, 0, 1, 1, 0, 1, 1, 1, 0, 1, 1, 1], [0] * 12)
-    assert _diff(spread).startswith("+75.0 [") and "alike" not in _diff(spread)
+    assert format_difference(spread).startswith("+75.0 [") and "alike" not in format_difference(spread)
     # every pair differs by the same amount: no spread to show, and the table says so
     alike = paired_difference([1] * 12, [0] * 12)
-    assert _diff(alike) == "+100.0 (all 12 pairs alike)"
+    assert format_difference(alike) == "+100.0 (all 12 pairs alike)"
     few = paired_difference([1, 0], [0, 0])
-    assert _diff(few) == "+50.0 (n = 2, no interval)"
-    assert _diff(paired_difference([], [])) == "—"
+    assert format_difference(few) == "+50.0 (n = 2, no interval)"
+    assert format_difference(paired_difference([], [])) == "—"
 
 
 def test_the_report_table_is_the_store(tmp_path: Path) -> None:
@@ -250,7 +250,7 @@ def test_the_report_table_is_the_store(tmp_path: Path) -> None:
     rows it says, and each Δ success the paired difference computed from those rows."""
     import re
 
-    from copi.experiments.benchmark_report import read_benchmark
+    from copi.reports import read_benchmark
 
     methods = tuple(parse_methods("straight@map,compass-guard@map,dwa@map"))
     cfg = BenchmarkConfig(methods=methods, families=("crowd",), episodes=12)

@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from copi.experiments.methods import MethodRun
+from copi.methods import MethodRun
 
 
 def _caught(monkeypatch: pytest.MonkeyPatch, module: str) -> list[Any]:
@@ -22,7 +22,7 @@ def _caught(monkeypatch: pytest.MonkeyPatch, module: str) -> list[Any]:
 def test_the_benchmark_figure_plots_each_rows_success_against_its_excess(
     monkeypatch: pytest.MonkeyPatch, tmp_path: Path
 ) -> None:
-    from copi.experiments import benchmark_report as br
+    from copi.reports import _benchmark as br
 
     def stats(success: float, excess: float) -> dict[str, float]:
         return {"success": success, "excess_median": excess}
@@ -34,7 +34,7 @@ def test_the_benchmark_figure_plots_each_rows_success_against_its_excess(
         "crowd": {MethodRun("dwa", "map", "route"): stats(0.4, 0.33),
                   MethodRun("straight", "map", "route"): stats(0.0, math.nan)},
     }  # fmt: skip
-    drawn = _caught(monkeypatch, "copi.experiments.benchmark_report")
+    drawn = _caught(monkeypatch, "copi.reports._figures")
     br._figure_success_excess(table, tmp_path)
     (fig,) = drawn
     for ax, family in zip(fig.axes, table, strict=False):
@@ -55,14 +55,14 @@ def test_the_benchmark_figure_plots_each_rows_success_against_its_excess(
 def test_the_lifelong_figure_plots_success_and_excess_per_block_of_tasks(
     monkeypatch: pytest.MonkeyPatch, tmp_path: Path
 ) -> None:
-    from copi.experiments import lifelong_report as lr
+    from copi.reports import _lifelong as lr
 
     def row(task: int, outcome: str, excess: float | None) -> dict[str, Any]:
         return {"task": task, "outcome": outcome, "excess": excess, "unfamiliar": 0.1 * task}
 
     # 20 tasks, 2 per point: success 1, 0.5, 1, ... and excess medians per block
     rows = [row(t, "success" if t % 4 != 3 else "timeout", 0.01 * t) for t in range(20)]
-    drawn = _caught(monkeypatch, "copi.experiments.lifelong_report")
+    drawn = _caught(monkeypatch, "copi.reports._figures")
     lr._figure_lifelong({"copi-learnt": rows, "dwa": rows[:10]}, 20, tmp_path / "f.png")
     (fig,) = drawn
     ax_s, ax_e, ax_u = fig.axes[:3]
@@ -83,7 +83,7 @@ def test_the_lifelong_figure_plots_success_and_excess_per_block_of_tasks(
 def test_fig5_draws_each_games_pursuer_and_evader_paths(
     monkeypatch: pytest.MonkeyPatch, tmp_path: Path
 ) -> None:
-    from copi.experiments import report
+    from copi.reports import _navigation as report
     from copi.world import random_world
 
     world = random_world(seed=1)
@@ -96,7 +96,7 @@ def test_fig5_draws_each_games_pursuer_and_evader_paths(
 
     runs = {"capability-static": [game(0, True), game(1, False)],
             "capability-dynamic": [game(2, False)]}  # fmt: skip
-    drawn = _caught(monkeypatch, "copi.experiments.report")
+    drawn = _caught(monkeypatch, "copi.reports._figures")
     assert report._fig5(runs, tmp_path) == tmp_path / "fig5_pursuit.png"
     (fig,) = drawn
     titled = {ax.get_title(): ax for ax in fig.axes}

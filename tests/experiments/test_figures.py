@@ -5,8 +5,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from copi.experiments import random_walk_episodes, save_episode_gif, save_episode_png
-from copi.world import Simulator
+from copi.reports import save_episode_gif, save_episode_png
+from copi.world import Simulator, random_walk_episodes
 from tests.common import PILLARS, U_TRAP
 
 
@@ -45,13 +45,14 @@ def test_the_capability_figures_show_what_they_say(faithful_caps, tmp_path: Path
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
-    from copi.experiments import capability_figures as cf
     from copi.learning import Capabilities
+    from copi.reports import _capabilities as cf
+    from copi.reports import _figures
 
     caps = Capabilities.load(faithful_caps)
     drawn = []
     with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(cf, "save_figure", lambda fig, path: drawn.append(fig) or path)
+        mp.setattr(_figures, "save_figure", lambda fig, path: drawn.append(fig) or path)
         cf.save_context_map(caps, tmp_path)
         cf.save_skeleton_curve(caps, tmp_path)
     (lines,) = [c for c in drawn[0].axes[0].collections if isinstance(c, LineCollection)]

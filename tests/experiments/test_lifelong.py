@@ -11,7 +11,6 @@ import numpy as np
 import pytest
 
 from copi.core import Agent, Observation, Task
-from copi.experiments._episode import run_episode
 from copi.experiments.lifelong import (
     LifelongConfig,
     draw_life,
@@ -19,11 +18,12 @@ from copi.experiments.lifelong import (
     run_lifelong,
     world_identity,
 )
-from copi.experiments.lifelong_report import lifelong_blocks, lives_difference
-from copi.experiments.methods import MethodRun, make_agent
-from copi.experiments.store import ResultsStore
 from copi.learning import Capabilities, LearnParams, learn
+from copi.methods import MethodRun, make_agent
 from copi.online import CausalMap, CausalMapFormatError, LearntAgent
+from copi.reports import lifelong_blocks
+from copi.results import ResultsStore, lives_difference
+from copi.runs import run_episode
 from tests.cli.test_main import run
 
 
@@ -141,7 +141,7 @@ def test_runner_resumes_a_life_at_a_time_and_saves_causal_maps(learnt: str, tmp_
     run_lifelong(cfg, out, workers=2)
     assert _rows(out) == rows
     # Each causal life was saved, for its world and these capabilities.
-    from copi.experiments._runs import file_sha
+    from copi._files import file_sha
 
     ident = world_identity("indoor", 0, 0)
     saved = tmp_path / "maps" / f"copi-learnt-sensor-causal-{ident}.npz"
@@ -254,7 +254,7 @@ def test_a_world_with_no_valid_tasks_is_recorded_as_skipped(
 ) -> None:
     import copi.experiments.lifelong as lifelong
     from copi.errors import InvalidWorldError
-    from copi.experiments.lifelong_report import write_lifelong_report
+    from copi.reports import write_lifelong_report
 
     real = lifelong.draw_life
 
@@ -278,7 +278,7 @@ def test_a_world_with_no_valid_tasks_is_recorded_as_skipped(
 def test_an_older_store_gains_the_lifelong_table_and_runs_are_reported_apart(
     learnt: str, tmp_path: Path
 ) -> None:
-    from copi.experiments.lifelong_report import write_lifelong_report
+    from copi.reports import write_lifelong_report
 
     out = tmp_path / "old.sqlite"
     with ResultsStore(out):

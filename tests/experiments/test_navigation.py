@@ -11,15 +11,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from copi.experiments import (
-    NavigationConfig,
-    ResultsError,
-    ResultsStore,
-    evaluate,
-    evaluate_episode,
-    write_report,
-)
+from copi.experiments import NavigationConfig, evaluate, evaluate_episode
 from copi.learning import LearnParams, learn
+from copi.reports import write_report
+from copi.results import ResultsError, ResultsStore
 
 TIMINGS = {"decision_us", "strategy_us"}
 
@@ -243,9 +238,9 @@ def test_a_world_file_without_a_valid_task_is_refused_before_any_run(tmp_path: P
 def test_an_episode_without_a_valid_task_is_recorded_as_skipped(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    import copi.experiments.navigation as nav
+    import copi.runs._draw as nav
     from copi.errors import InvalidWorldError
-    from copi.experiments.report import summarize
+    from copi.reports import summarize
 
     real = nav.draw_episode
 

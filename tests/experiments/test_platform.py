@@ -12,8 +12,9 @@ import numpy as np
 import pytest
 
 import copi  # noqa: F401  (registers the environments)
-from copi.experiments import make_agent, run_in_env
 from copi.learning import Capabilities
+from copi.methods import make_agent
+from copi.runs import run_in_env
 from copi.world import World, save_worlds
 from tests.cli.test_faults import _one_line_error, run
 from tests.common import U_TRAP
@@ -45,7 +46,7 @@ def test_the_benchmark_runs_a_user_s_world_file(tmp_path: Path, capsys) -> None:
                            "--workers", "1"], capsys)  # fmt: skip
     assert code == 0, err
     assert "## worlds of mine.json (4 episodes)" in text
-    from copi.experiments.store import ResultsStore
+    from copi.results import ResultsStore
 
     with ResultsStore(out / "benchmark.sqlite", readonly=True) as store:
         rows = store.episodes()
@@ -83,7 +84,7 @@ def test_a_causal_map_s_unknown_members_are_never_read(tmp_path: Path) -> None:
     assert cmap.n_options == 0 and occ is None
     # a known member claiming more than a map holds is refused before it is unpacked
     from copi.online import CausalMapFormatError
-    from copi.online._causal_file import MAX_MEMBER_BYTES
+    from copi.online._causal_map import MAX_MEMBER_BYTES
 
     big = tmp_path / "big.npz"
     with zipfile.ZipFile(big, "w", compression=zipfile.ZIP_DEFLATED) as zf:
@@ -103,7 +104,7 @@ def test_a_causal_map_s_unknown_members_are_never_read(tmp_path: Path) -> None:
 def test_rows_of_an_older_store_read_with_method_level_and_strategy_apart(tmp_path: Path) -> None:
     import sqlite3
 
-    from copi.experiments.store import ResultsStore
+    from copi.results import ResultsStore
 
     path = tmp_path / "old.sqlite"
     with ResultsStore(path) as store:  # written as copi 0.2 named things
@@ -136,7 +137,7 @@ def test_rows_of_an_older_store_read_with_method_level_and_strategy_apart(tmp_pa
 def test_registered_parameters_are_the_classes_defaults() -> None:
     import inspect
 
-    from copi.experiments import method_spec
+    from copi.methods import method_spec
 
     # a method that is a class's own default configuration registers nothing over it
     for name in ("copi-faithful", "copi-learnt", "straight", "compass-guard", "vfh", "dwa",

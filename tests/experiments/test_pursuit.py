@@ -4,8 +4,10 @@ from pathlib import Path
 
 import pytest
 
-from copi.experiments import PursuitConfig, ResultsStore, pursue, run_game, write_report
+from copi.experiments import PursuitConfig, pursue, run_game
 from copi.learning import LearnParams, learn
+from copi.reports import write_report
+from copi.results import ResultsStore
 
 
 @pytest.fixture(scope="module")

@@ -5,7 +5,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from copi.experiments.report import _fig3, _fig4, _outcome_title
+from copi.reports._navigation import _fig3, _fig4, _outcome_title
 from tests.common import SQUARE_ROOM
 
 
@@ -20,7 +20,7 @@ def test_fig4_puts_the_tail_in_a_labelled_last_bin(tmp_path: Path) -> None:
     excess = {"a": rng.exponential(0.3, 500), "b": np.append(rng.exponential(0.2, 300), 40.0)}
     drawn = []
     with pytest.MonkeyPatch.context() as mp:
-        mp.setattr("copi.experiments.report.save_figure", lambda fig, path: drawn.append(fig))
+        mp.setattr("copi.reports._figures.save_figure", lambda fig, path: drawn.append(fig))
         assert _fig4(excess, tmp_path) == tmp_path / "fig4_excess.png"
     ax = drawn[0].axes[0]
     hi = max(float(np.percentile(100 * np.concatenate(list(excess.values())), 98)), 50.0)

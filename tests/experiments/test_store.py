@@ -11,13 +11,13 @@ from pathlib import Path
 
 import pytest
 
-from copi.experiments import ResultsError, ResultsStore
-from copi.experiments.navigation import EpisodeResult
-from copi.experiments.store import APPLICATION_ID
+from copi.experiments.navigation import EpisodeRow
+from copi.results import ResultsError, ResultsStore
+from copi.results._store import APPLICATION_ID
 
 
-def _row(k: int) -> EpisodeResult:
-    return EpisodeResult(
+def _row(k: int) -> EpisodeRow:
+    return EpisodeRow(
         episode=k, world="w", seed=0, success=True, reached=True, collided=False,
         timed_out=False, steps=10, contacts=0, path_length=9.5, optimal_length=9.0,
         excess=0.5 / 9.0, decision_us=3.0, strategy_us=0.0, unfamiliar=0.0, no_policy=0,

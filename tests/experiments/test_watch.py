@@ -7,8 +7,9 @@ import pytest
 from PIL import Image
 
 from copi.errors import InvalidArgumentError
-from copi.experiments.watch import frames, save_watch, watch_episode
 from copi.learning import LearnParams, learn
+from copi.reports import save_watch, watch_episode
+from copi.reports._watch import frames
 from copi.world import save_worlds
 from tests.common import U_TRAP
 
@@ -46,8 +47,8 @@ def test_copi_learnt_shows_the_direction_and_the_safety_it_chose_by() -> None:
     assert scored and all("P(safe) 0." in s.text or "P(safe) 1." in s.text for s in scored
                           if "choice: move" in s.text)  # fmt: skip
     # the watched decisions are the agent's own: the same episode unwatched takes the same path
-    from copi.experiments import make_agent, run_episode
-    from copi.experiments.navigation import draw_episode
+    from copi.methods import make_agent
+    from copi.runs import draw_episode, run_episode
 
     sim = draw_episode("crowd", 2, 0, record=True)
     run_episode(make_agent("copi-learnt", learnt), sim, sensing="map", max_steps=25)
@@ -99,8 +100,7 @@ def test_compass_guard_scores_are_the_kernels_own_verdicts() -> None:
     best-aligned one the explanation admits (or, when it admits none, an escape)."""
     from copi.baselines import CompassGuard
     from copi.core import Observation
-    from copi.experiments._episode import make_task
-    from copi.experiments.navigation import draw_episode
+    from copi.runs import draw_episode, make_task
 
     sim = draw_episode("crowd", 5, 0)
     agent = CompassGuard()
@@ -134,7 +134,7 @@ def test_bad_inputs(caps, tmp_path: Path) -> None:  # type: ignore[no-untyped-de
 
 
 def test_mp4_without_ffmpeg_is_refused(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr("copi.experiments.watch.shutil.which", lambda _: None)
+    monkeypatch.setattr("copi.reports._watch.shutil.which", lambda _: None)
     w = watch_episode("straight", max_steps=2)
     with pytest.raises(InvalidArgumentError, match="writing .mp4 needs ffmpeg on the PATH"):
         save_watch(w, tmp_path / "x.mp4")

@@ -12,13 +12,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
 
+from copi.envs.chauffeur import parallel_env
 from copi.errors import InvalidArgumentError
 from copi.games import (
     ChauffeurGame,
     ChauffeurParams,
     Pursuer,
     critical_beta,
-    parallel_env,
     play_open,
     pursuer_step,
 )

@@ -2,7 +2,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from copi.games import parallel_env
+from copi.envs.chauffeur import parallel_env
 from copi.world._render import GOAL, PURSUER
 
 

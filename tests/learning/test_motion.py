@@ -15,10 +15,6 @@ from hypothesis import strategies as st
 from copi.cli import main
 from copi.core import Observation, Task
 from copi.errors import CapabilitiesFormatError, InvalidArgumentError
-from copi.experiments._episode import run_episode
-from copi.experiments.methods import ABLATIONS, make_agent, method_spec, parse_methods
-from copi.experiments.navigation import draw_episode
-from copi.experiments.presets import check_preset_capabilities
 from copi.learning import Capabilities, LearnParams, SymmetryGroup, learn, ring_operators
 from copi.learning._contexts import (
     MOTION_CLIP,
@@ -26,7 +22,15 @@ from copi.learning._contexts import (
     motion_contexts,
     previous_in_world,
 )
+from copi.methods import (
+    ABLATIONS,
+    check_preset_capabilities,
+    make_agent,
+    method_spec,
+    parse_methods,
+)
 from copi.online import ContextController, CopiAgent, LearntAgent
+from copi.runs import draw_episode, run_episode
 
 
 @pytest.fixture(scope="module")
@@ -217,7 +221,7 @@ def test_the_ablations_are_named_and_run(moving, tmp_path) -> None:
     assert set(runs) == set(ABLATIONS)
     # in the benchmark, on the same episodes, paired against copi-learnt
     from copi.experiments.benchmark import BenchmarkConfig, run_benchmark
-    from copi.experiments.benchmark_report import write_benchmark_report
+    from copi.reports import write_benchmark_report
 
     caps = {"learnt": str(still.save(tmp_path / "l.npz")),
             "learnt-motion": str(moving.save(tmp_path / "m.npz"))}  # fmt: skip

@@ -16,8 +16,6 @@ from hypothesis import strategies as st
 
 from copi.baselines import CompassGuard
 from copi.errors import CapabilitiesFormatError, InvalidArgumentError
-from copi.experiments._episode import run_episode
-from copi.experiments.navigation import draw_episode
 from copi.learning import Capabilities, LearnParams, learn, simulated_steps
 from copi.learning._safety import (
     SafetyModel,
@@ -35,6 +33,7 @@ from copi.learning.kernels import (
     safety_probabilities,
 )
 from copi.online import LearntAgent
+from copi.runs import draw_episode, run_episode
 from copi.world import Simulator, World
 
 

@@ -8,7 +8,6 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from copi.errors import InvalidArgumentError
-from copi.experiments.capability_figures import fig2_operators
 from copi.learning import (
     Operator,
     PermutationAutomaton,
@@ -16,6 +15,7 @@ from copi.learning import (
     reduce_landmarks,
     ring_operators,
 )
+from copi.reports import fig2_operators
 from copi.world import RangeSensor, World, random_world
 
 RING = SymmetryGroup.generate(ring_operators(32))

@@ -14,10 +14,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from copi.errors import InvalidArgumentError
-from copi.experiments._episode import run_episode
-from copi.experiments.methods import make_agent
+from copi.methods import make_agent
 from copi.online import CausalMap, CausalMapFormatError, CausalStrategy, Steering
 from copi.online._causal_kernels import OFFSETS, plausible_options
+from copi.runs import run_episode
 from copi.world import Simulator
 from tests.baselines._support import TRAP_GOAL, route_length
 from tests.common import U_TRAP

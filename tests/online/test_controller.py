@@ -180,8 +180,8 @@ def test_a_guarded_agent_resting_against_a_wall_can_still_move() -> None:
     # Found on a Moving AI room map: an agent 0.34 from a wall (0.04 from touching it)
     # refused every step, since each step's path starts where it stands, too near the
     # wall; it stood still for good. A step is judged by whether it brings it nearer.
-    from copi.experiments._episode import run_episode
-    from copi.experiments.methods import make_agent
+    from copi.methods import make_agent
+    from copi.runs import run_episode
     from copi.world import Simulator, World
 
     room = World([[0, 0], [20, 0], [20, 20], [0, 20]])

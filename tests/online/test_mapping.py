@@ -5,9 +5,9 @@ import pytest
 
 from copi.core import Observation
 from copi.errors import InvalidArgumentError
-from copi.experiments._episode import make_task, run_episode
-from copi.experiments.methods import make_agent
+from copi.methods import make_agent
 from copi.online import Mapping, Steering
+from copi.runs import make_task, run_episode
 from copi.world import Simulator
 from tests.baselines._support import TRAP_GOAL, route_length
 from tests.common import U_TRAP

@@ -84,8 +84,8 @@ def test_the_export_runs_in_numpy_as_the_torch_policy_does(tmp_path: Path) -> No
 
 
 def test_a_short_training_beats_a_random_policy(tmp_path: Path) -> None:
-    from copi.experiments import run_episode
     from copi.rl import TrainConfig, train
+    from copi.runs import run_episode
     from copi.world import ObstacleSpec, World, register_family, unregister_family
 
     def room(rng, *, name=None):  # noqa: ANN001, ANN202
@@ -111,7 +111,7 @@ def test_a_short_training_beats_a_random_policy(tmp_path: Path) -> None:
         curve = json.loads((tmp_path / "p.json").read_text())["curve"]
         assert curve[-1]["success"] == summary["curve"][-1]["success"]
         assert [c["steps"] for c in curve][:2] == [6_000, 12_000] and len(curve) >= 4
-        from copi.experiments.navigation import draw_episode
+        from copi.runs import draw_episode
 
         trained = PPOAgent(weights=str(tmp_path / "p.npz"))
         rand = PPOAgent(policy=_random_policy(1))
@@ -165,7 +165,7 @@ def test_bad_policy_files_are_refused_in_one_line(
         load_policy(bad)
     out = tmp_path / "r.sqlite"
     args = ["evaluate", "--method", "ppo", "-o", str(out), "--worlds", "1"]
-    from copi.experiments import register_method, unregister_method
+    from copi.methods import register_method, unregister_method
 
     register_method("ppo-test", PPOAgent, params={"weights": str(bad)}, replace=True)
     try:

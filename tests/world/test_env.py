@@ -6,8 +6,8 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 import copi  # noqa: F401 - registers the environments
+from copi.envs.navigation import NavigationEnv
 from copi.errors import InvalidArgumentError
-from copi.world import NavigationEnv
 from tests.common import U_TRAP
 
 IDS = sorted(i for i in gymnasium.registry if i.startswith("copi/"))

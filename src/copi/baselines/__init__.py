@@ -27,6 +27,7 @@ The local methods (level ``sensor``) follow the same global direction as copi's 
 
 from __future__ import annotations
 
+from copi.baselines._common import Steered
 from copi.baselines._dwa import DWA
 from copi.baselines._navground import (
     NAVGROUND_BEHAVIORS,
@@ -38,10 +39,13 @@ from copi.baselines._ppo import (
     PolicyFormatError,
     PolicyWeights,
     PPOAgent,
+    direction_frame,
     features,
     load_policy,
+    observation_size,
     packaged_policy,
     save_policy,
+    to_world,
 )
 from copi.baselines._replan import Replan
 from copi.baselines._simple import CompassGuard, Straight
@@ -60,13 +64,17 @@ __all__ = [
     "PolicyFormatError",
     "PolicyWeights",
     "Replan",
+    "Steered",
     "Straight",
     "TangentBug",
     "TrackedMPC",
     "VFH",
+    "direction_frame",
     "features",
     "load_policy",
     "navground_available",
+    "observation_size",
     "packaged_policy",
     "save_policy",
+    "to_world",
 ]

@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from copi.ceilings import ModelOracle
+from copi.bounds import ModelOracle
 from copi.core import EXPLAINED, Observation, Sensing, Task
 from copi.errors import InvalidArgumentError
 from copi.geometry import ring_angles
@@ -225,7 +225,7 @@ class DiscTracker:
 
 
 class TrackedMPC(ModelOracle):
-    """:class:`copi.ceilings.ModelOracle`'s planner at level ``map``, on the discs it
+    """:class:`copi.bounds.ModelOracle`'s planner at level ``map``, on the discs it
     makes out in its reading (:class:`DiscTracker`) rather than the true ones.
 
     A method, not a bound: it knows what every method at ``map`` knows (its position,
@@ -246,7 +246,7 @@ class TrackedMPC(ModelOracle):
         On 200 validation crowd episodes (seed 1) a prior turn spread of 0.6 instead of
         1.0 changes 94 successes to 95.
     samples, horizon, plan, loss, margin, escape, seed
-        The planner's, as :class:`copi.ceilings.ModelOracle`'s.
+        The planner's, as :class:`copi.bounds.ModelOracle`'s.
     """
 
     name = "tracked-mpc"

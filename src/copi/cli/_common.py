@@ -268,8 +268,7 @@ Guard = Annotated[
 def names_epilog() -> str:
     """The registered methods, families and presets, for a command's --help (computed only
     when help is asked for: the registry imports every method)."""
-    from copi.experiments.methods import method_names
-    from copi.experiments.presets import PRESETS
+    from copi.methods import PRESETS, method_names
     from copi.world import family_names
 
     return (

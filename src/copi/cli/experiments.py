@@ -59,7 +59,7 @@ def _warn_if_mapping_closes(world_file: Path, sensor_strategy: str) -> None:
     """Warn of the worlds whose every way the mapping strategy's grid may close."""
     if sensor_strategy != "mapping":
         return
-    from copi.experiments.navigation import mapping_closes
+    from copi.runs import mapping_closes
 
     for w in mapping_closes(world_file):
         console.print(f"copi: warning: {w}", highlight=False, markup=False)
@@ -103,9 +103,9 @@ def evaluate_command(
     --preset, runs the mode the capabilities file was learnt for. Rerunning the same
     command resumes an interrupted run."""
     from copi.experiments.navigation import NavigationConfig, evaluate
-    from copi.experiments.presets import resolve
-    from copi.experiments.report import summarize, warnings_for
-    from copi.experiments.store import ResultsStore
+    from copi.methods import resolve
+    from copi.reports import summarize, warnings_for
+    from copi.results import ResultsStore
 
     if output is None:
         raise CopiError("evaluate needs -o/--output: the results file to write")
@@ -118,7 +118,7 @@ def evaluate_command(
 
         load_worlds(world_file)  # a bad file is refused before anything is written
         _warn_if_mapping_closes(world_file, sensor_strategy)
-    from copi.experiments.methods import method_spec
+    from copi.methods import method_spec
 
     needs_caps = method_spec(chosen.method).capabilities is not None
     config = NavigationConfig(
@@ -193,15 +193,10 @@ def benchmark_command(
     of a world file), into DIR/benchmark.sqlite (resumable), with DIR/benchmark.md: a
     table per family, paired differences against a reference method with 95 % bootstrap
     intervals, and a figure."""
-    from copi.experiments.benchmark import (
-        BENCHMARK_FAMILIES,
-        BenchmarkConfig,
-        ensure_capabilities,
-        run_benchmark,
-    )
-    from copi.experiments.benchmark_report import write_benchmark_report
-    from copi.experiments.methods import method_spec, parse_methods
-    from copi.world import check_family, family_inputs
+    from copi.experiments.benchmark import BenchmarkConfig, ensure_capabilities, run_benchmark
+    from copi.methods import method_spec, parse_methods
+    from copi.reports import write_benchmark_report
+    from copi.world import BENCHMARK_FAMILIES, check_family, family_inputs
 
     if world_file is not None and families is not None:
         raise CopiError("--world-file and --families do not go together: the world file's "
@@ -237,7 +232,7 @@ def benchmark_command(
         inputs=[world_file],
     )  # fmt: skip
     if world_file is not None:
-        from copi.experiments.navigation import check_world_file
+        from copi.runs import check_world_file
 
         check_world_file(world_file)  # a bad file is refused before anything is written
         _warn_if_mapping_closes(world_file, sensor_strategy)
@@ -297,8 +292,8 @@ def pursuit_command(
     turn radius chases the agent; the agent plays the game's strategy through its
     capabilities (or, with --evader game, directly). Resumable, like evaluate."""
     from copi.experiments.pursuit import PursuitConfig, pursue, resolve_evader
-    from copi.experiments.report import summarize_games
-    from copi.experiments.store import ResultsStore
+    from copi.reports import summarize_games
+    from copi.results import ResultsStore
 
     check_outputs({"the results store": (output, "results")}, inputs=[capabilities])
     caps = _load_capabilities(capabilities)
@@ -358,8 +353,9 @@ def lifelong_command(
     task; beside it the mapping baselines, which keep their grids. Resumable (a life at a
     time); writes OUTPUT.md and OUTPUT.png: success and median excess early and late in
     life, paired differences with 95 % intervals, and the goals measured."""
-    from copi.experiments.lifelong import LifelongConfig, parse_lifelong_methods, run_lifelong
-    from copi.experiments.lifelong_report import lifelong_report_paths, write_lifelong_report
+    from copi.experiments.lifelong import LifelongConfig, run_lifelong
+    from copi.methods import parse_lifelong_methods
+    from copi.reports import lifelong_report_paths, write_lifelong_report
     from copi.world import check_family, family_inputs
 
     check_family(family)
@@ -398,8 +394,8 @@ def report_command(
     """Write report.md with the summary tables and the paper's Fig. 3, 4 and 5 (and
     Experiment 3's report where the files hold lives)."""
     from copi.errors import InvalidArgumentError
-    from copi.experiments.report import write_report
-    from copi.experiments.store import ResultsStore
+    from copi.reports import write_report
+    from copi.results import ResultsStore
 
     for r in results:
         if not r.exists():
@@ -427,7 +423,7 @@ def reproduce_command(
     Experiment 1 on 1549 dynamic worlds in the faithful mode (the paper's chain) and the
     extended mode, Experiment 2 (homicidal-chauffeur games), the benchmark's quick
     version, Experiment 3 (lifelong), and the reports."""
-    from copi.experiments._reproduce import reproduce
+    from copi.experiments import reproduce
 
     check_outputs(
         {"the directory": (output, "directory"),
@@ -455,8 +451,7 @@ def list_command() -> None:
     copi's and those other packages add through their entry points."""
     from rich.table import Table
 
-    from copi.experiments.methods import method_names, method_spec
-    from copi.experiments.presets import PRESETS
+    from copi.methods import PRESETS, method_names, method_spec
     from copi.world import family_names, family_spec
 
     table = Table("method", "needs", "levels", "extra", "what it is", title="methods")

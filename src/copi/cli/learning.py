@@ -94,9 +94,9 @@ def learn_command(
     --preset faithful learns the paper's. A learnt preset also probes task-free walks for
     its safety priors (--probe-*); the simulated steps of it all are printed."""
     from copi.errors import InvalidArgumentError
-    from copi.experiments.presets import DEFAULT_PRESET
-    from copi.experiments.presets import preset as get_preset
     from copi.learning import LearnParams, learn, simulated_steps
+    from copi.methods import DEFAULT_PRESET
+    from copi.methods import preset as get_preset
 
     if preset is None and directions is None and not motion:
         preset = DEFAULT_PRESET
@@ -234,8 +234,8 @@ def figures_command(
 ) -> None:
     """Draw the paper's Fig. 1 panels (context map, H(k), landmarks and templates,
     policies) and Fig. 2 (the permutation automaton of the toy domain)."""
-    from copi.experiments.capability_figures import save_capability_figures
     from copi.learning import Capabilities
+    from copi.reports import save_capability_figures
 
     caps = Capabilities.load(capabilities)
     for path in save_capability_figures(caps, output):

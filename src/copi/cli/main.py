@@ -41,7 +41,7 @@ def _interrupted(exc: BaseException | None) -> None:
     console.print(f"copi: interrupted{': ' + detail if detail else ''}", highlight=False)
     if _threads_left():
         # An interrupted process pool's manager thread can outlive the pool's bounded stop
-        # (copi.experiments.executor._stop_now); the interpreter would join it at exit and
+        # (copi.runs._executor._stop_now); the interpreter would join it at exit and
         # hang. Everything is saved (each chunk is committed), so leave now.
         sys.stdout.flush()
         sys.stderr.flush()

@@ -58,9 +58,9 @@ def watch_command(
     one copi evaluate runs as K; without --method or --preset, the mode the capabilities
     file was learnt for."""
     from copi.errors import InvalidArgumentError
-    from copi.experiments.presets import resolve
-    from copi.experiments.watch import FORMATS, save_watch, watch_episode
     from copi.learning import Capabilities
+    from copi.methods import resolve
+    from copi.reports import FORMATS, save_watch, watch_episode
     from copi.world import check_family, load_worlds
 
     if output.suffix.lower() not in FORMATS:

@@ -52,13 +52,8 @@ def world_show(
     gif: Annotated[bool, typer.Option("--gif", help="Also animate each walk as a GIF.")] = False,
 ) -> None:
     """Draw each world with a random-walk episode (PNG per world, plus worlds.png)."""
-    from copi.experiments import (
-        random_walk_episodes,
-        save_episode_gif,
-        save_episode_png,
-        save_overview_png,
-    )
-    from copi.world import load_worlds
+    from copi.reports import save_episode_gif, save_episode_png, save_overview_png
+    from copi.world import load_worlds, random_walk_episodes
 
     worlds = load_worlds(world_file)
     pictures = {
@@ -195,7 +190,7 @@ def plan_command(
         else:
             out.print(f"  {vertex[0]:.6g} {vertex[1]:.6g}")
     if output is not None:
-        from copi.experiments.figures import save_plan_png
+        from copi.reports import save_plan_png
 
         output.parent.mkdir(parents=True, exist_ok=True)
         save_plan_png(world, plan.path, output, title=f"{world.name}: length {plan.length:.3f}")

@@ -1,106 +1,87 @@
-"""Experiment runners, the method registry, figures and reports: the only part of copi
-that writes files (besides saving capabilities).
+"""The paper's experiments and the benchmark: their configurations and runners.
 
-The entry points a user needs to build on copi: :func:`register_method` (a method of
-their own, then run by ``copi benchmark --methods NAME``), :func:`run_episode` (any agent
-in any episode) and :func:`run_in_env` (an agent in the Gymnasium environment), the
-experiments' configurations and runners, and :class:`ResultsStore`, whose rows read back
-typed.
+Experiment 1 (:mod:`~copi.experiments.navigation`, paper §IV Fig. 3-4), Experiment 2
+(:mod:`~copi.experiments.pursuit`, the homicidal chauffeur, Fig. 5), Experiment 3
+(:mod:`~copi.experiments.lifelong`, one world task after task), the benchmark (every
+method on the same episodes of every family) and :func:`reproduce` (all of them end to
+end). Each is a configuration (a frozen dataclass: everything that decides its results)
+and a runner into a results store, built on :mod:`copi.runs`; their reports are
+:mod:`copi.reports`'.
+
+Names that lived here before the platform had rooms of its own (``make_agent``,
+``run_episode``, ``ResultsStore``, ...) still work, with a ``DeprecationWarning`` saying
+where they are now.
 """
 
 from __future__ import annotations
 
-from copi.experiments._episode import (
-    EnvEpisode,
-    EpisodeOutcome,
-    make_task,
-    optimal_to_goal,
-    run_episode,
-    run_in_env,
-)
-from copi.experiments._reproduce import reproduce
-from copi.experiments.benchmark import BenchmarkConfig, run_benchmark
-from copi.experiments.demo import random_walk_episodes
-from copi.experiments.executor import ExecutorError, InlineExecutor, make_executor
-from copi.experiments.figures import (
-    save_episode_gif,
-    save_episode_png,
-    save_overview_png,
-    save_plan_png,
-)
-from copi.experiments.lifelong import LifelongConfig, run_lifelong
-from copi.experiments.methods import (
-    MethodRun,
-    MethodSpec,
-    make_agent,
-    method_names,
-    method_spec,
-    parse_methods,
-    register_method,
-    unregister_method,
-)
+from copi._moved import moved_names
+from copi.experiments._reproduce import Reproduced, reproduce
+from copi.experiments.benchmark import BenchmarkConfig, ensure_capabilities, run_benchmark
+from copi.experiments.lifelong import LifelongConfig, draw_life, run_lifelong
 from copi.experiments.navigation import (
-    EpisodeResult,
     NavigationConfig,
     evaluate,
     evaluate_episode,
     evaluate_episodes,
 )
-from copi.experiments.presets import DEFAULT_PRESET, PRESETS, Preset, preset
-from copi.experiments.pursuit import GameRow, PursuitConfig, pursue, run_game, run_games
-from copi.experiments.report import summarize, summarize_games, write_report
-from copi.experiments.rows import EpisodeRow, GameRecord, LifeRow, RunRow
-from copi.experiments.store import ResultsError, ResultsStore
+from copi.experiments.pursuit import PursuitConfig, pursue, run_game, run_games
 
 __all__ = [
     "BenchmarkConfig",
-    "DEFAULT_PRESET",
-    "EnvEpisode",
-    "EpisodeOutcome",
-    "EpisodeResult",
-    "EpisodeRow",
-    "ExecutorError",
-    "GameRecord",
-    "GameRow",
-    "InlineExecutor",
-    "LifeRow",
     "LifelongConfig",
-    "MethodRun",
-    "MethodSpec",
     "NavigationConfig",
-    "PRESETS",
-    "Preset",
     "PursuitConfig",
-    "ResultsError",
-    "ResultsStore",
-    "RunRow",
+    "Reproduced",
+    "draw_life",
+    "ensure_capabilities",
     "evaluate",
     "evaluate_episode",
     "evaluate_episodes",
-    "make_agent",
-    "make_executor",
-    "make_task",
-    "method_names",
-    "method_spec",
-    "optimal_to_goal",
-    "parse_methods",
-    "preset",
     "pursue",
-    "random_walk_episodes",
-    "register_method",
     "reproduce",
     "run_benchmark",
-    "run_episode",
     "run_game",
     "run_games",
-    "run_in_env",
     "run_lifelong",
-    "save_episode_gif",
-    "save_episode_png",
-    "save_overview_png",
-    "save_plan_png",
-    "summarize",
-    "summarize_games",
-    "unregister_method",
-    "write_report",
 ]
+
+__getattr__ = moved_names(__name__, {
+    "DEFAULT_PRESET": "copi.methods",
+    "EnvEpisode": "copi.runs",
+    "EpisodeOutcome": "copi.runs",
+    "EpisodeResult": "copi.results:EpisodeRow",
+    "EpisodeRow": "copi.results",
+    "ExecutorError": "copi.runs",
+    "GameRecord": "copi.results:GameRow",
+    "GameRow": "copi.results",
+    "InlineExecutor": "copi.runs",
+    "LifeRow": "copi.results",
+    "MethodRun": "copi.methods",
+    "MethodSpec": "copi.methods",
+    "PRESETS": "copi.methods",
+    "Preset": "copi.methods",
+    "ResultsError": "copi.results",
+    "ResultsStore": "copi.results",
+    "RunRow": "copi.results",
+    "make_agent": "copi.methods",
+    "make_executor": "copi.runs",
+    "make_task": "copi.runs",
+    "method_names": "copi.methods",
+    "method_spec": "copi.methods",
+    "optimal_to_goal": "copi.runs",
+    "parse_methods": "copi.methods",
+    "preset": "copi.methods",
+    "random_walk_episodes": "copi.world",
+    "register_method": "copi.methods",
+    "run_episode": "copi.runs",
+    "run_in_env": "copi.runs",
+    "save_episode_gif": "copi.reports",
+    "save_episode_png": "copi.reports",
+    "save_overview_png": "copi.reports",
+    "save_plan_png": "copi.reports",
+    "summarize": "copi.reports",
+    "summarize_games": "copi.reports",
+    "unregister_method": "copi.methods",
+    "write_report": "copi.reports",
+})  # fmt: skip

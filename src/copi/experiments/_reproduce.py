@@ -15,7 +15,15 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+from copi._rng import check_seed
 from copi.errors import CopiError, ResultsError
+from copi.experiments.benchmark import BenchmarkConfig, ensure_capabilities, run_benchmark
+from copi.experiments.lifelong import LifelongConfig, run_lifelong
+from copi.experiments.navigation import NavigationConfig, evaluate
+from copi.experiments.pursuit import PursuitConfig, pursue
+from copi.methods import PRESETS, method_spec, parse_methods
+from copi.reports import write_benchmark_report, write_report
+from copi.world import BENCHMARK_FAMILIES
 
 __all__ = ["Reproduced", "reproduce"]
 
@@ -51,8 +59,6 @@ def reproduce(
     small version of each (100 episodes, 20 games, 10 benchmark episodes per family, 2
     lives of 10 tasks) to try things out. The faithful mode stays the paper's: its
     capabilities and method are the paper's own."""
-    from copi._rng import check_seed
-
     check_seed(seed)
     out = Path(output)
     out.mkdir(parents=True, exist_ok=True)
@@ -69,20 +75,6 @@ def reproduce(
 
 
 def _reproduce(out: Path, quick: bool, workers: int, seed: int, tasks: Tasks) -> Reproduced:
-    from copi.experiments.benchmark import (
-        BENCHMARK_FAMILIES,
-        BenchmarkConfig,
-        ensure_capabilities,
-        run_benchmark,
-    )
-    from copi.experiments.benchmark_report import write_benchmark_report
-    from copi.experiments.lifelong import LifelongConfig, run_lifelong
-    from copi.experiments.methods import method_spec, parse_methods
-    from copi.experiments.navigation import NavigationConfig, evaluate
-    from copi.experiments.presets import PRESETS
-    from copi.experiments.pursuit import PursuitConfig, pursue
-    from copi.experiments.report import write_report
-
     results = out / "experiment1.sqlite"
     episodes = 100 if quick else 1549
     # Experiment 1 in the paper's mode and the extended one

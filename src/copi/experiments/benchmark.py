@@ -10,11 +10,7 @@ fresh copy of the simulator. Rows are committed as items come back; rerunning re
 
 from __future__ import annotations
 
-import copy
 import dataclasses
-import hashlib
-import json
-import math
 import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -22,39 +18,27 @@ from pathlib import Path
 from typing import Any
 
 from copi._rng import check_seed
-from copi._validation import positive_int
+from copi._validation import check_count, positive_int
 from copi.errors import InvalidArgumentError, InvalidWorldError
-from copi.experiments._episode import optimal_to_goal, run_episode
-from copi.experiments._runs import (
+from copi.learning import Capabilities, LearnParams, learn
+from copi.methods import PRESETS, MethodRun, as_arms, make_agent, method_spec, parse_methods
+from copi.results import EpisodeRow
+from copi.runs import (
     MAX_EPISODES,
+    Episode,
     Series,
-    check_count,
     check_family_inputs,
     code_version,
-    file_sha,
-    run_series,
-)
-from copi.experiments.methods import (
-    MethodRun,
-    as_arms,
-    check_method_capabilities,
-    make_agent,
-    method_spec,
-    parse_methods,
-)
-from copi.experiments.navigation import (
-    EpisodeResult,
-    _capabilities,
-    check_world_file,
-    draw_episode,
     episode_world_name,
-    result_row,
+    load_capabilities,
+    resolve_inputs,
+    run_id,
+    run_series,
     skipped_row,
+    step_limit,
     world_file_label,
 )
-from copi.experiments.presets import PRESETS
-from copi.learning import Capabilities, LearnParams
-from copi.world import check_family, family_inputs
+from copi.world import BENCHMARK_FAMILIES, check_family
 
 __all__ = [
     "BENCHMARK_FAMILIES",
@@ -64,16 +48,8 @@ __all__ = [
     "run_benchmark",
 ]
 
-BENCHMARK_FAMILIES = ("star", "polygon", "indoor", "maps", "crowd")
-"""Families in the order the report shows them (the paper's first)."""
-
-
-def benchmark_max_steps(optimal: float) -> int:
-    """The step limit of an episode: three times its optimum plus 100 (1000 at most, and
-    when there is no optimum), so a stuck method costs little and a slow one has room."""
-    if not math.isfinite(optimal):
-        return 1000
-    return int(min(1000, math.ceil(3.0 * optimal + 100)))
+benchmark_max_steps = step_limit
+"""An episode's step limit (:func:`copi.runs.step_limit`; the name older code imports)."""
 
 
 @dataclass(frozen=True)
@@ -82,7 +58,7 @@ class BenchmarkConfig:
     families or worlds, how many episodes."""
 
     methods: tuple[MethodRun, ...]
-    """The arms (see :func:`copi.experiments.methods.parse_methods`; text such as
+    """The arms (see :func:`copi.methods.parse_methods`; text such as
     ``"dwa@sensor:mapping"`` is parsed)."""
     families: tuple[str, ...] = BENCHMARK_FAMILIES
     episodes: int = 1000
@@ -132,24 +108,18 @@ class BenchmarkConfig:
 
     def resolved(self) -> BenchmarkConfig:
         """With the content hash of each capabilities file (checking each loads and fits
-        the methods that run on it) and of the data each family draws from."""
-        shas = {}
-        for preset, path in self.capabilities.items():
-            caps = Capabilities.load(path)
-            for run in self.methods:
-                if method_spec(run.method).capabilities == preset:
-                    check_method_capabilities(run.method, caps, path)
-            shas[preset] = file_sha(path)
-        for run in self.methods:  # each method built once: the files it reads are checked
-            needs = method_spec(run.method).capabilities
-            make_agent(run.method, None if needs is None else _capabilities(
-                self.capabilities[needs], shas[needs]))  # fmt: skip
+        the methods that run on it), of the world file, and of the data each family
+        draws from (:func:`copi.runs.resolve_inputs`)."""
+        found = resolve_inputs(
+            capabilities=self.capabilities, methods=[r.method for r in self.methods],
+            families=() if self.world_file is not None else self.families,
+            world_file=self.world_file, agent_radius=self.agent_radius,
+        )  # fmt: skip
         if self.world_file is not None:
-            check_world_file(self.world_file, agent_radius=self.agent_radius)
-            inputs = {self.groups[0]: {"world_file_sha": file_sha(self.world_file)}}
+            inputs = {self.groups[0]: {"world_file_sha": found.world_file_sha}}
         else:
-            inputs = {f: family_inputs(f) for f in self.families}
-        return dataclasses.replace(self, capabilities_sha=shas, inputs=inputs)
+            inputs = found.families
+        return dataclasses.replace(self, capabilities_sha=found.capabilities_sha, inputs=inputs)
 
     def identity(self, family: str, run: MethodRun) -> dict[str, Any]:
         """What makes one (family, arm) run the same run: not the number of episodes (a
@@ -174,8 +144,7 @@ class BenchmarkConfig:
         return ident
 
     def run_id(self, family: str, run: MethodRun) -> str:
-        text = json.dumps(self.identity(family, run), sort_keys=True)
-        return hashlib.sha256(text.encode()).hexdigest()[:16]
+        return run_id(self.identity(family, run))
 
     def series(self) -> list[Series]:
         """Every (family, arm) run of the benchmark, family by family."""
@@ -189,15 +158,15 @@ class BenchmarkConfig:
 
 def run_item(
     config: BenchmarkConfig, family: str, k: int, todo: list[Series]
-) -> list[tuple[Series, EpisodeResult]]:
+) -> list[tuple[Series, EpisodeRow]]:
     """Episode k of ``family`` (or of the world file) for each series in ``todo``: the
-    world is drawn and the optimum computed once, then each method runs on a fresh copy
-    of the simulator."""
+    episode is drawn and its optimum computed once, then each method runs on a fresh
+    copy of it."""
     check_family_inputs(family, config.inputs.get(family, {}), config.world_file)
-    world_file = config.world_file
     try:
-        base = draw_episode(
-            family, k, config.seed, agent_radius=config.agent_radius, world_file=world_file,
+        episode = Episode.draw(
+            family, k, config.seed, agent_radius=config.agent_radius,
+            world_file=config.world_file,
             world_file_sha=config.inputs.get(family, {}).get("world_file_sha", ""),
         )  # fmt: skip
     except InvalidWorldError as exc:  # recorded, so that the run goes on
@@ -207,26 +176,17 @@ def run_item(
                             sensing=s.config["sensing"], strategy=s.config["strategy"]))
             for s in todo
         ]  # fmt: skip
-    optimal = optimal_to_goal(base)
-    max_steps = benchmark_max_steps(optimal)
     out = []
     for s in todo:
-        method, sensing, strategy = s.method, s.config["sensing"], s.config["strategy"]
-        preset = method_spec(method).capabilities
+        preset = method_spec(s.method).capabilities
         caps = None
         if preset is not None:
-            caps = _capabilities(
+            caps = load_capabilities(
                 config.capabilities[preset], config.capabilities_sha.get(preset, "")
             )
-        sim = copy.deepcopy(base)
-        agent = make_agent(method, caps)
-        res = run_episode(
-            agent, sim, sensing=sensing, max_steps=max_steps,
-            end_on_contact=config.end_on_contact,
-            strategy=strategy if sensing == "sensor" else "greedy",
-        )  # fmt: skip
-        out.append((s, result_row(sim, k, config.seed, optimal, res, family=family,
-                                  sensing=sensing, strategy=strategy)))  # fmt: skip
+        row = episode.row(make_agent(s.method, caps), sensing=s.config["sensing"],
+                          strategy=s.config["strategy"], end_on_contact=config.end_on_contact)
+        out.append((s, row))  # fmt: skip
     return out
 
 
@@ -240,8 +200,6 @@ def ensure_capabilities(
     for (the number of workers aside); otherwise it is refused, with the first parameter
     that differs, and left as it is (results elsewhere may rest on it).
     """
-    from copi.learning import learn
-
     d = Path(directory)
     d.mkdir(parents=True, exist_ok=True)
     paths = {}

@@ -23,7 +23,6 @@ from __future__ import annotations
 import copy
 import dataclasses
 import hashlib
-import json
 import math
 import os
 from collections.abc import Callable
@@ -33,35 +32,48 @@ from typing import Any
 
 import numpy as np
 
+from copi._files import file_sha
 from copi._rng import check_seed
-from copi._validation import positive_int
+from copi._validation import check_count, positive_int
 from copi.errors import InvalidArgumentError, InvalidWorldError
-from copi.experiments._episode import optimal_to_goal, run_episode
-from copi.experiments._runs import (
+from copi.learning import Capabilities
+from copi.methods import (
+    LIFELONG_METHODS,
+    LIFELONG_REFERENCE,
+    MethodRun,
+    as_arms,
+    check_preset_capabilities,
+    make_agent,
+    method_spec,
+    parse_lifelong_methods,
+)
+from copi.online import CausalStrategy
+from copi.results import LifeRow
+from copi.runs import (
     MAX_LIVES,
     MAX_TASKS,
     Series,
-    check_count,
     check_family_inputs,
     code_version,
-    file_sha,
+    load_capabilities,
+    optimal_to_goal,
+    resolve_inputs,
+    run_episode,
+    run_id,
     run_series,
+    step_limit,
 )
-from copi.experiments.benchmark import benchmark_max_steps
-from copi.experiments.methods import (
-    MethodRun,
-    as_arms,
-    make_agent,
-    method_spec,
-    parse_methods,
+from copi.world import (
+    RangeSensor,
+    Simulator,
+    check_family,
+    place_obstacles,
+    sample_start_goal,
+    sample_world,
 )
-from copi.experiments.navigation import _capabilities
-from copi.world import RangeSensor, Simulator, check_family, family_inputs, sample_world
-from copi.world._generate import place_obstacles, sample_start_goal
 
 __all__ = [
     "LIFELONG_METHODS",
-    "LifeResult",
     "LifelongConfig",
     "REFERENCE",
     "draw_life",
@@ -69,43 +81,9 @@ __all__ = [
     "run_lifelong",
 ]
 
-
-LIFELONG_METHODS: dict[str, str] = {
-    "copi-learnt@sensor:causal": "the learnt preset planning over its causal map and "
-    "occupancy grid, both kept from task to task",
-    "copi-learnt-continual@sensor:causal": "as copi-learnt with the causal strategy, also "
-    "growing contexts for unfamiliar readings",
-    "copi-learnt@sensor:mapping": "the learnt preset following its occupancy grid (kept), no "
-    "causal map",
-    "compass-guard@sensor:mapping": "compass-guard following its occupancy grid (kept)",
-    "dwa@sensor:mapping": "DWA following its occupancy grid (kept)",
-    "copi-learnt@map": "the learnt preset given the static map (the route): the yardstick "
-    "the sensor-level agent should reach",
-}
-"""Experiment 3's arms (method, level, strategy), copi's first, and what each keeps."""
-
-REFERENCE = MethodRun("copi-learnt", "sensor", "causal")
-"""The arm every other arm of Experiment 3 is paired against."""
-
-
-def parse_lifelong_methods(text: str | None) -> tuple[MethodRun, ...]:
-    """``"copi-learnt@sensor:causal,dwa@sensor:mapping"`` -> arms; None: all of
-    :data:`LIFELONG_METHODS`. A method named alone runs at ``sensor`` with the ``causal``
-    strategy (copi's) or ``mapping`` (methods without contexts keep only a grid)."""
-    items = list(LIFELONG_METHODS) if text is None else [
-        t.strip() for t in text.split(",") if t.strip()
-    ]  # fmt: skip
-    if not items:
-        raise InvalidArgumentError("methods must name at least one method; got none")
-    out: list[MethodRun] = []
-    for item in items:
-        if "@" not in item and ":" not in item:
-            spec = method_spec(item)
-            item = f"{item}@sensor:{'causal' if spec.capabilities else 'mapping'}"
-        for run in parse_methods(item):
-            if run not in out:
-                out.append(run)
-    return tuple(out)
+REFERENCE = LIFELONG_REFERENCE
+"""The arm every other arm of Experiment 3 is paired against
+(:data:`copi.methods.LIFELONG_REFERENCE`)."""
 
 
 @dataclass(frozen=True)
@@ -153,26 +131,26 @@ class LifelongConfig:
             )
 
     def resolved(self) -> LifelongConfig:
-        """With the capabilities file's content hash (checks it loads and has what the
-        learnt preset needs)."""
-        for run in self.methods:  # methods that read no capabilities, built once now
-            if method_spec(run.method).capabilities is None:
-                make_agent(run.method)
-        if self.capabilities is None:
-            return dataclasses.replace(self, inputs=family_inputs(self.family))
-        from copi.experiments.presets import check_preset_capabilities
-        from copi.learning import Capabilities
-
-        caps = Capabilities.load(self.capabilities)
-        check_preset_capabilities("learnt", caps, self.capabilities)
-        rays = RangeSensor().n_rays  # the lives' sensor
-        if caps.n_rays != rays:
-            raise InvalidArgumentError(
-                f"the capabilities were learnt for {caps.n_rays} rays; the sensor has {rays}"
-            )
+        """With the content hashes of its inputs (:func:`copi.runs.resolve_inputs`): the
+        capabilities file must hold what the learnt preset needs, for the lives' sensor;
+        the causal maps a run starts from (``from_maps``) must each load for its world."""
+        if self.capabilities is not None:
+            caps = Capabilities.load(self.capabilities)
+            check_preset_capabilities("learnt", caps, self.capabilities)
+            rays = RangeSensor().n_rays  # the lives' sensor
+            if caps.n_rays != rays:
+                raise InvalidArgumentError(
+                    f"the capabilities were learnt for {caps.n_rays} rays; the sensor has {rays}"
+                )
+        found = resolve_inputs(
+            capabilities={} if self.capabilities is None else {"learnt": self.capabilities},
+            methods=[r.method for r in self.methods], families=[self.family],
+            agent_radius=self.agent_radius,
+        )  # fmt: skip
         done = dataclasses.replace(
-            self, capabilities_sha=file_sha(self.capabilities), inputs=family_inputs(self.family)
-        )
+            self, capabilities_sha=found.capabilities_sha.get("learnt", ""),
+            inputs=found.families[self.family],
+        )  # fmt: skip
         if self.from_maps is None:
             return done
         if self.maps is not None and Path(self.maps).resolve() == Path(self.from_maps).resolve():
@@ -182,8 +160,6 @@ class LifelongConfig:
             )
         # Every map the run will start from, checked now (before anything is written),
         # as the strategy will load it.
-        from copi.online import CausalStrategy
-
         for run in self.methods:
             if run.strategy != "causal":
                 continue
@@ -223,8 +199,7 @@ class LifelongConfig:
         return ident
 
     def run_id(self, run: MethodRun) -> str:
-        text = json.dumps(self.identity(run), sort_keys=True)
-        return hashlib.sha256(text.encode()).hexdigest()[:16]
+        return run_id(self.identity(run))
 
     def series(self) -> list[Series]:
         """Every arm's run: its lives 0 .. worlds - 1."""
@@ -233,34 +208,6 @@ class LifelongConfig:
                    self.worlds)
             for r in self.methods
         ]  # fmt: skip
-
-
-@dataclass(frozen=True)
-class LifeResult:
-    """One task of one life (a row of the ``lifelong`` table)."""
-
-    world: str
-    life: int
-    task: int
-    seed: int
-    family: str
-    sensing: str
-    outcome: str
-    """success, collision or timeout; "skipped" when the world has no valid chain of
-    tasks (the life's rows then count in no rate)."""
-    success: bool
-    steps: int
-    path_length: float
-    optimal_length: float
-    excess: float
-    decision_us: float
-    unfamiliar: float
-    grown: int
-    """Context nodes grown so far in this life (continual methods)."""
-    options: int
-    """Options recorded in the causal map so far in this life (causal methods)."""
-    strategy: str = "route"
-    """The arm's global strategy ("route" at level map)."""
 
 
 def world_identity(family: str, life: int, seed: int) -> str:
@@ -310,18 +257,16 @@ def _arm(series: Series) -> MethodRun:
 def live(
     config: LifelongConfig, run: MethodRun, life: int, sims: list[Simulator],
     optima: list[float],
-) -> list[LifeResult]:  # fmt: skip
+) -> list[LifeRow]:  # fmt: skip
     """Arm ``run``'s life in world ``life``: its tasks in order, one agent throughout."""
     caps = None
     if method_spec(run.method).capabilities is not None:
         assert config.capabilities is not None
-        caps = _capabilities(config.capabilities, config.capabilities_sha)
+        caps = load_capabilities(config.capabilities, config.capabilities_sha)
     agent = make_agent(run.method, caps)
     ident = world_identity(config.family, life, config.seed)
     steering = getattr(agent, "steering", None)
     if config.from_maps is not None and run.strategy == "causal" and steering is not None:
-        from copi.online import CausalStrategy
-
         steering.causal = CausalStrategy.load(
             causal_map_path(config.from_maps, run, config.family, life, config.seed),
             world=ident, capabilities=config.capabilities_sha,
@@ -332,13 +277,13 @@ def live(
     for t, (base, optimal) in enumerate(zip(sims, optima, strict=True)):
         sim = copy.deepcopy(base)
         res = run_episode(
-            agent, sim, sensing=run.sensing, max_steps=benchmark_max_steps(optimal),
+            agent, sim, sensing=run.sensing, max_steps=step_limit(optimal),
             strategy=strategy, origin=origin,
         )  # fmt: skip
         success = res.outcome == "success"
         causal = getattr(steering, "causal", None)
         rows.append(
-            LifeResult(
+            LifeRow(
                 world=sim.world.name, life=life, task=t, seed=config.seed,
                 family=config.family, sensing=run.sensing, outcome=res.outcome,
                 success=success, steps=res.steps, path_length=res.path_length,
@@ -361,7 +306,7 @@ def live(
 
 def run_life(
     config: LifelongConfig, group: Any, life: int, todo: list[Series]
-) -> list[tuple[Series, list[LifeResult]]]:
+) -> list[tuple[Series, list[LifeRow]]]:
     """World ``life``: its tasks drawn and their optima computed once, then the life of
     each series in ``todo``."""
     check_family_inputs(config.family, config.inputs)
@@ -374,11 +319,11 @@ def run_life(
     return [(s, live(config, _arm(s), life, sims, optima)) for s in todo]
 
 
-def _skipped(config: LifelongConfig, run: MethodRun, life: int) -> list[LifeResult]:
+def _skipped(config: LifelongConfig, run: MethodRun, life: int) -> list[LifeRow]:
     """The rows of a life whose world has no valid chain of tasks (counted in no rate)."""
     nan = math.nan
     return [
-        LifeResult(
+        LifeRow(
             world=world_identity(config.family, life, config.seed), life=life, task=t,
             seed=config.seed, family=config.family, sensing=run.sensing,
             outcome="skipped", success=False, steps=0, path_length=nan, optimal_length=nan,

@@ -3,7 +3,7 @@ capabilities, in stationary and dynamic worlds."""
 
 from __future__ import annotations
 
-import math
+import dataclasses
 import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -12,19 +12,24 @@ from typing import Any
 import numpy as np
 
 from copi._rng import check_seed
-from copi._validation import positive_int
+from copi._validation import check_count, non_negative, positive_int
 from copi.core import Agent, Observation, Task
 from copi.errors import InvalidArgumentError
-from copi.experiments._runs import MAX_EPISODES, RunIdentity, check_count
-from copi.experiments.navigation import _capabilities
-from copi.games import ChauffeurParams
-from copi.games._world_game import ChauffeurGame
+from copi.games import ChauffeurGame, ChauffeurParams
+from copi.methods import (
+    PRESETS,
+    check_preset_capabilities,
+    make_agent,
+    method_spec,
+    preset_of,
+)
 from copi.online import ContextController
+from copi.results import GameRow
+from copi.runs import MAX_EPISODES, code_version, load_capabilities, resolve_inputs, run_one
 from copi.world import RangeSensor
 
 __all__ = [
     "EVADERS",
-    "GameRow",
     "PursuitConfig",
     "pursue",
     "resolve_evader",
@@ -39,7 +44,7 @@ registered method of level sensor may play it too, by its name."""
 
 
 @dataclass(frozen=True)
-class PursuitConfig(RunIdentity):
+class PursuitConfig:
     """One run of Experiment 2."""
 
     capabilities: str | None
@@ -76,8 +81,6 @@ class PursuitConfig(RunIdentity):
 
     def __post_init__(self) -> None:
         if self.evader not in EVADERS:
-            from copi.experiments.methods import method_spec
-
             try:
                 spec = method_spec(self.evader)
             except InvalidArgumentError:
@@ -98,9 +101,24 @@ class PursuitConfig(RunIdentity):
         check_count(self.games, "games", MAX_EPISODES)
         check_count(self.horizon, "horizon", 100_000)
         check_seed(self.seed)
-        if not (math.isfinite(self.guard) and self.guard >= 0):
-            raise InvalidArgumentError(f"guard must be a finite number >= 0; got {self.guard!r}")
+        non_negative(self.guard, "guard")
         self.params()  # validates gamma and the radii
+
+    def resolved(self) -> PursuitConfig:
+        """With the capabilities file's content hash (checked to load:
+        :func:`copi.runs.resolve_inputs`)."""
+        if self.capabilities is None:
+            return self
+        found = resolve_inputs(capabilities={"evader": self.capabilities})
+        return dataclasses.replace(self, capabilities_sha=found.capabilities_sha["evader"])
+
+    def identity(self) -> dict[str, Any]:
+        """What makes two runs the same run: the configuration without the capabilities'
+        path, with its content and copi's version."""
+        d = dataclasses.asdict(self)
+        del d["capabilities"]
+        d["code"] = code_version()
+        return d
 
     @property
     def method(self) -> str:
@@ -117,34 +135,10 @@ class PursuitConfig(RunIdentity):
         )
 
 
-@dataclass(frozen=True)
-class GameRow:
-    """One game's row in the results store (table ``games``)."""
-
-    game: int
-    world: str
-    seed: int
-    dynamic: bool
-    captured: bool
-    capture_time: float
-    """Time of capture (NaN when the evader survived)."""
-    survival: float
-    """Capture time, or the horizon."""
-    contacts: int
-    """Steps at which the evader touched a moving obstacle."""
-    closest: float
-    gamma: float
-    beta: float
-    outcome: str = "escaped"
-    """"captured", "collision" (touched a moving obstacle first; ends the game when
-    contacts end games) or "escaped" (survived the horizon). Exclusive."""
-    trajectory: dict[str, Any] | None = None
-
-
 def run_game(config: PursuitConfig, k: int, agent: Agent | None = None) -> GameRow:
     """Game k of a run; depends only on (config, k). ``agent``: play the evader through
     this agent instead of the one ``config.evader`` names (e.g. a policy in training)."""
-    caps = _capabilities(config.capabilities, config.capabilities_sha) if config.capabilities \
+    caps = load_capabilities(config.capabilities, config.capabilities_sha) if config.capabilities \
         else None  # fmt: skip
     params = config.params()
     n_rays = caps.n_rays if caps is not None else 32
@@ -226,12 +220,10 @@ def resolve_evader(
     guard: float | None = None,
 ) -> tuple[str, float]:
     """The evader and guard a pursuit run plays with (``copi pursuit``), as
-    :func:`copi.experiments.presets.resolve` settles them for navigation: the preset's
+    :func:`copi.methods.resolve` settles them for navigation: the preset's
     (or, without one, the mode the capabilities were learnt for) evader and guard; a
     ``--guard`` contradicting a preset, an evader the preset does not play, or a file
     learnt for another mode is refused."""
-    from copi.experiments.presets import PRESETS, check_preset_capabilities, preset_of
-
     if evader is not None and evader not in EVADERS:
         raise InvalidArgumentError(f"evader must be one of {', '.join(EVADERS)}; got {evader!r}")
     name = preset if preset is not None else preset_of(caps)
@@ -266,8 +258,6 @@ def _evader_agent(caps: Any, config: PursuitConfig, sensor: RangeSensor) -> Agen
     """The evader's method (``learnt``: copi-learnt) with its registered parameters and,
     where it has a guard, this run's, told a task with no map (it is handed the static
     reading each step, as the capability evader is)."""
-    from copi.experiments.methods import make_agent, method_spec
-
     name = "copi-learnt" if config.evader == "learnt" else config.evader
     spec = method_spec(name)
     extra = {"guard": config.guard} if "guard" in spec.params else {}
@@ -291,8 +281,8 @@ def pursue(
 ) -> str:
     """Run (or resume) Experiment 2 into ``output``; returns the run id."""
     config = config.resolved()
-    return config.run_into(
-        output, experiment="pursuit", method=config.method, table="games", total=config.games,
-        item=run_game, unit="games", chunk=8, workers=workers, scheduler=scheduler,
-        progress=progress,
+    return run_one(
+        config, config.identity(), output, experiment="pursuit", method=config.method,
+        table="games", total=config.games, item=run_game, unit="games", chunk=8,
+        workers=workers, scheduler=scheduler, progress=progress,
     )  # fmt: skip

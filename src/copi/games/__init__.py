@@ -3,6 +3,7 @@ through the learnt capabilities."""
 
 from __future__ import annotations
 
+from copi._moved import moved_names
 from copi.games._chauffeur import (
     ChauffeurParams,
     Pursuer,
@@ -10,12 +11,10 @@ from copi.games._chauffeur import (
     evader_direction,
     isaacs_control,
 )
-from copi.games._pettingzoo import ChauffeurEnv, parallel_env
 from copi.games._play import GameResult, first_contact, play_open, pursuer_step
 from copi.games._world_game import ChauffeurGame
 
 __all__ = [
-    "ChauffeurEnv",
     "ChauffeurGame",
     "ChauffeurParams",
     "GameResult",
@@ -24,7 +23,11 @@ __all__ = [
     "evader_direction",
     "first_contact",
     "isaacs_control",
-    "parallel_env",
     "play_open",
     "pursuer_step",
 ]
+
+__getattr__ = moved_names(__name__, {
+    "ChauffeurEnv": "copi.envs.chauffeur",
+    "parallel_env": "copi.envs.chauffeur",
+})  # fmt: skip

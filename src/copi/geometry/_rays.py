@@ -15,7 +15,7 @@ __all__ = ["cast_rays", "ring_angles"]
 
 def ring_angles(n_rays: int = 32) -> FloatArray:
     """Angles of a ring of ``n_rays`` rays: ray i points at 2 pi i / n counter-clockwise
-    from +x (DESIGN.md, "Sensor ring").
+    from +x (docs/design.md, "Sensor ring").
 
     Examples
     --------

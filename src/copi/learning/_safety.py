@@ -8,7 +8,7 @@ while the obstacles keep moving (all copies see the same obstacle motion). A pro
 default). With ``label="escape"`` the action is taken once and the probe is safe when it
 touches nothing and leaves a second move (a compass direction at full or half speed, or
 waiting) that passes every obstacle's next step with :data:`ESCAPE_CLEAR` to spare:
-the model-predictive oracle's own check of a first move (:mod:`copi.ceilings`), on the
+the model-predictive oracle's own check of a first move (:mod:`copi.bounds`), on the
 probe's real future. The second label is what a controller that turns needs (holding a direction is
 not what it will do), and the oracle with that check alone, planning nothing further,
 succeeds in 111 of 200 validation crowd episodes against compass-guard's 86
@@ -132,7 +132,7 @@ def second_move_clear(qx, qy, r, segs, c1, c2, radii, moves, clear):  # type: ig
     """Whether an agent of radius ``r`` at (qx, qy) has a move among ``moves`` (velocities,
     one step) that no wall (``segs``) stops short and that passes every obstacle moving
     linearly from ``c1`` to ``c2`` (radii ``radii``) with ``clear`` to spare: the
-    model-oracle's own test (:func:`copi.ceilings._kernels.escapes`) on one future, with
+    model-oracle's own test (:func:`copi.bounds._kernels.escapes`) on one future, with
     :data:`WALL_ROOM` to spare from walls where the oracle keeps 1e-6."""
     free = np.empty(moves.shape[0], dtype=np.bool_)
     local = local_segments(qx, qy, segs, 1.0 + r + 1e-3)  # a move is at most 1 long

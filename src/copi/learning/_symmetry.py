@@ -65,7 +65,7 @@ class Operator:
 
 
 def ring_operators(n_rays: int = 32) -> tuple[Operator, Operator]:
-    """The ring sensor's default symmetries (DESIGN.md): a quarter turn (ray i's reading
+    """The ring sensor's default symmetries (docs/design.md): a quarter turn (ray i's reading
     moves to ray i + N/4, order 4) and the mirror about the x axis (ray i to ray -i,
     order 2). Together they generate the 8 symmetries of the square.
 

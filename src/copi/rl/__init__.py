@@ -5,7 +5,7 @@ trained policy does not."""
 
 from __future__ import annotations
 
-from copi.rl._env import TRAINING_SEED, LocalPolicyEnv, Reward
+from copi.envs.local_policy import TRAINING_SEED, LocalPolicyEnv, Reward
 from copi.rl._train import VALIDATION_SEED, RLMissingError, TrainConfig, rl_available, train
 
 __all__ = [

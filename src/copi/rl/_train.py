@@ -21,9 +21,12 @@ from typing import Any
 import numpy as np
 
 from copi._files import write_text
-from copi.baselines._ppo import PolicyWeights, save_policy
+from copi.baselines import PolicyWeights, PPOAgent, save_policy
+from copi.envs.local_policy import LocalPolicyEnv, Reward
 from copi.errors import CopiError, InvalidArgumentError
-from copi.rl._env import LocalPolicyEnv, Reward
+from copi.experiments import PursuitConfig, run_game
+from copi.reports import finish_figure, new_figure
+from copi.runs import Episode
 from copi.world import check_family
 
 __all__ = ["RLMissingError", "TrainConfig", "export_policy", "rl_available", "train"]
@@ -141,16 +144,9 @@ def validation_success(
     """Success of ``policy`` (or of any ``agent``, e.g. copi's, for comparison) on fixed
     episodes of the validation seed (the training families and levels in turn; the
     game's survival for the chauffeur task)."""
-    from copi.baselines._ppo import PPOAgent
-    from copi.experiments._episode import optimal_to_goal, run_episode
-    from copi.experiments.benchmark import benchmark_max_steps
-    from copi.experiments.navigation import draw_episode
-
     if agent is None:
         agent = PPOAgent(policy=policy)
     if config.task == "chauffeur":
-        from copi.experiments.pursuit import PursuitConfig, run_game
-
         cfg = PursuitConfig(capabilities=None, evader="game", games=episodes,
                             seed=VALIDATION_SEED)  # fmt: skip
         survived = [run_game(cfg, k, agent).outcome == "escaped" for k in range(episodes)]
@@ -160,11 +156,10 @@ def validation_success(
         family = config.families[k % len(config.families)]
         level = config.levels[(k // len(config.families)) % len(config.levels)]
         try:
-            sim = draw_episode(family, k, VALIDATION_SEED)
+            episode = Episode.draw(family, k, VALIDATION_SEED)
         except Exception:
             continue
-        limit = benchmark_max_steps(optimal_to_goal(sim))
-        out = run_episode(agent, sim, sensing=level, max_steps=limit)  # type: ignore[arg-type]
+        out = episode.run(agent, sensing=level)  # type: ignore[arg-type]
         wins.append(out.outcome == "success")
     return float(np.mean(wins)) if wins else math.nan
 
@@ -291,15 +286,11 @@ def train(
 
 
 def _curve_figure(curve: list[dict[str, float]], path: Path, *, title: str) -> None:
-    from copi._files import save_figure
-    from copi.experiments.figures import _figure
-
-    fig = _figure(5.0, 3.4)
+    fig = new_figure(5.0, 3.4)
     ax = fig.add_subplot()
     ax.plot([c["steps"] for c in curve], [100 * c["success"] for c in curve], marker="o", ms=3)
     ax.set_xlabel("environment steps")
     ax.set_ylabel("validation success (%)")
     ax.set_title(title, fontsize=9)
     ax.grid(alpha=0.3)
-    fig.tight_layout()
-    save_figure(fig, path)
+    finish_figure(fig, path)

@@ -2,16 +2,17 @@
 
 A static :class:`World` (a polygon with holes), the paper's random worlds and the
 benchmark's world families (:func:`sample_world`), moving disc
-obstacles, a holonomic disc agent, the ring :class:`RangeSensor`, world files, and the
-Gymnasium environment ``copi/Navigation-v0``. All randomness comes from a passed seed or
-``numpy.random.Generator``.
+obstacles, a holonomic disc agent, the ring :class:`RangeSensor` and world files (the
+Gymnasium environment over them is :mod:`copi.envs`'). All randomness comes from a
+passed seed or ``numpy.random.Generator``.
 """
 
 from __future__ import annotations
 
-from copi.world._agents import RandomWalk
-from copi.world._env import NavigationEnv
+from copi._moved import moved_names
+from copi.world._agents import RandomWalk, random_walk_episodes
 from copi.world._families import (
+    BENCHMARK_FAMILIES,
     CROWD_OBSTACLES,
     FAMILIES,
     FamilySpec,
@@ -49,13 +50,13 @@ from copi.world._simulator import Simulator, StepResult
 from copi.world._world import ObstacleSpec, World
 
 __all__ = [
+    "BENCHMARK_FAMILIES",
     "CROWD_OBSTACLES",
     "FAMILIES",
     "FamilySpec",
     "IndoorParams",
     "MOVINGAI_ENV",
     "MapsParams",
-    "NavigationEnv",
     "ObstacleSpec",
     "PACKAGED_MAPS",
     "PolygonParams",
@@ -81,6 +82,7 @@ __all__ = [
     "movingai_dir",
     "place_obstacles",
     "polygon_world",
+    "random_walk_episodes",
     "random_world",
     "rasterize",
     "register_family",
@@ -91,3 +93,5 @@ __all__ = [
     "scaled_map_world",
     "unregister_family",
 ]
+
+__getattr__ = moved_names(__name__, {"NavigationEnv": "copi.envs.navigation"})

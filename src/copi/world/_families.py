@@ -237,6 +237,11 @@ for _name, _sampler, _summary, _inputs in (
 _FAMILIES.seal()
 
 
+BENCHMARK_FAMILIES = ("star", "polygon", "indoor", "maps", "crowd")
+"""copi's five families in the order results show them (the paper's first): what the
+benchmark runs unless told otherwise."""
+
+
 def in_sight(world: World, a: Any, b: Any, *, radius: float = 0.0) -> bool:
     """Whether a disc of ``radius`` can move in a straight line from ``a`` to ``b`` among
     the static walls (the segment lies in the free space, at least ``radius`` from every

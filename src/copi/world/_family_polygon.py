@@ -11,7 +11,7 @@ from shapely.geometry import LineString, Polygon
 from copi._rng import Seed, as_generator
 from copi._validation import FloatArray
 from copi.errors import InvalidArgumentError, InvalidWorldError
-from copi.geometry._polygons import signed_area, turned
+from copi.geometry import signed_area, turned
 from copi.world._world import World
 
 __all__ = ["PolygonParams", "is_star_shaped", "polygon_world"]

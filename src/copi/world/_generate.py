@@ -11,7 +11,7 @@ from shapely.geometry import MultiPolygon, Polygon
 from copi._rng import Seed, as_generator
 from copi._validation import FloatArray
 from copi.errors import InvalidArgumentError, InvalidWorldError
-from copi.geometry._polygons import turned
+from copi.geometry import turned
 from copi.geometry.kernels import clearance as _clearance_kernel
 from copi.world._world import ObstacleSpec, World
 

@@ -1,4 +1,4 @@
-"""World files: JSON, one world or a list of them (DESIGN.md, "World file")."""
+"""World files: JSON, one world or a list of them (docs/design.md, "World file")."""
 
 from __future__ import annotations
 

@@ -19,7 +19,7 @@ __all__ = ["RangeSensor"]
 class RangeSensor:
     """N range rays fixed to the world frame, ray i at angle 2 pi i / N from +x.
 
-    The navigation agent has no heading, so the ring does not turn with it (DESIGN.md).
+    The navigation agent has no heading, so the ring does not turn with it (docs/design.md).
     Ranges are measured from the agent's centre to the first wall, hole edge or moving
     disc, clipped to ``max_range``; a centre inside a disc reads 0 everywhere.
 

@@ -64,7 +64,7 @@ class ObstacleSpec:
     """How many moving obstacles a world has, how large and how fast (paper §IV).
 
     Defaults are the paper's: 10 to 15 discs random-walking at 0.6 of the agent's speed;
-    radii from 0.5 to 1.0 agent steps (the paper does not give sizes; DESIGN.md does).
+    radii from 0.5 to 1.0 agent steps (the paper does not give sizes; docs/design.md does).
     """
 
     count: tuple[int, int] = (10, 15)
@@ -300,7 +300,7 @@ class World:
     __hash__ = None  # type: ignore[assignment]
 
     def to_dict(self) -> dict[str, Any]:
-        """The JSON form of DESIGN.md ("World file")."""
+        """The JSON form of docs/design.md ("World file")."""
         out: dict[str, Any] = {
             "name": self.name,
             "boundary": self.boundary.tolist(),

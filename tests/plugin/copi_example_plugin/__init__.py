@@ -11,7 +11,7 @@ import math
 import numpy as np
 
 from copi.core import Agent, Observation, Task
-from copi.experiments import register_method
+from copi.methods import register_method
 from copi.world import ObstacleSpec, World, register_family
 
 

@@ -29,10 +29,12 @@ import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
 
-from copi.baselines._ppo import direction_frame, features, observation_size, to_world
+from copi.baselines import direction_frame, features, observation_size, to_world
 from copi.core import Observation, check_sensing
 from copi.errors import InvalidArgumentError
+from copi.games import ChauffeurGame
 from copi.online import Steering
+from copi.runs import draw_episode, make_task
 from copi.world import check_family
 
 __all__ = ["TRAINING_SEED", "LocalPolicyEnv", "Reward"]
@@ -118,15 +120,10 @@ class LocalPolicyEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
     # -- episodes ---------------------------------------------------------------------
 
     def _draw(self) -> None:
-        from copi.experiments._episode import make_task
-        from copi.experiments.navigation import draw_episode
-
         rng = self.np_random
         self.level = self.levels[int(rng.integers(len(self.levels)))]
         k = int(rng.integers(1_000_000))
         if self.task == "chauffeur":
-            from copi.games._world_game import ChauffeurGame
-
             self.game = ChauffeurGame.draw(self.seed_of_episodes, k, dynamic=True)
             self.sim = self.game.sim
             return

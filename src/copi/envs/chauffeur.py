@@ -11,8 +11,8 @@ from numpy.typing import NDArray
 from pettingzoo import ParallelEnv
 
 from copi.errors import InvalidArgumentError
-from copi.games._chauffeur import ChauffeurParams
-from copi.games._world_game import ChauffeurGame
+from copi.games import ChauffeurGame, ChauffeurParams
+from copi.world import render_rgb
 
 __all__ = ["ChauffeurEnv", "parallel_env"]
 
@@ -172,8 +172,6 @@ class ChauffeurEnv(ParallelEnv):  # type: ignore[misc]
         a ring of the capture radius, with its path in grey). There is no goal."""
         if self.render_mode is None or self.game is None:
             return None
-        from copi.world import render_rgb
-
         g = self.game
         car = (g.car.position, g.car.heading, self.params.capture_radius)
         path = np.asarray(g.car_path) if g.car_path else None

@@ -1,12 +1,10 @@
-"""What every experiment shares: a run's identity from its configuration, and the one
-loop that runs independent, seeded items (episodes, games, lives) into a results store
+"""The one loop of every experiment: independent, seeded items (episodes, games, lives)
+run in this process, on a local pool or on a Dask cluster, into a results store, each
+committed as it comes back, so that an interrupted run resumes where it stopped
 (:func:`run_series`)."""
 
 from __future__ import annotations
 
-import dataclasses
-import hashlib
-import json
 import os
 from collections.abc import Callable, Iterator
 from concurrent.futures import as_completed
@@ -14,16 +12,17 @@ from contextlib import AbstractContextManager, contextmanager
 from dataclasses import dataclass
 from typing import Any
 
-from copi.errors import Interrupted, InvalidArgumentError, ResultsError
-from copi.learning import Capabilities
+from copi.errors import Interrupted
+from copi.results import ResultsStore
+from copi.runs._executor import InlineExecutor, make_executor
+from copi.runs._inputs import run_id
 
 __all__ = [
     "MAX_EPISODES",
     "MAX_LIVES",
     "MAX_TASKS",
-    "RunIdentity",
     "Series",
-    "check_count",
+    "run_one",
     "run_series",
 ]
 
@@ -72,125 +71,12 @@ def _from_ctrl_c(exc: BaseException) -> bool:
     return False
 
 
-def file_sha(path: str | os.PathLike[str]) -> str:
-    """The SHA-256 of a file's content (read in blocks)."""
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
-
-
 MAX_EPISODES = 100_000
 """Most episodes (or games) a run may ask for per family: at a tenth of a second each,
 three hours a method; more is a typing error, refused before anything is written."""
 MAX_LIVES = 10_000
 """Most lives (worlds) of a lifelong run, and MAX_TASKS tasks in each."""
 MAX_TASKS = 10_000
-
-
-def check_count(value: int, name: str, most: int) -> int:
-    """``value`` if it is at most ``most``; otherwise one clear error."""
-    if value > most:
-        raise InvalidArgumentError(
-            f"{name} must be at most {most:,} (a run of more would take days and the memory "
-            f"of its bookkeeping); got {value:,}"
-        )
-    return value
-
-
-def check_family_inputs(
-    family: str, expected: dict[str, str], world_file: str | None = None
-) -> None:
-    """Refuse to draw an episode of ``family`` when the data it draws from is no longer
-    what the run recorded (e.g. ``$COPI_MOVINGAI`` pointed elsewhere on a worker). A
-    world file's content is checked as its worlds are read."""
-    from copi.world import family_inputs
-
-    if world_file is None and expected and family_inputs(family) != expected:
-        raise ResultsError(
-            f"the data the {family} family draws from changed during the run "
-            f"({', '.join(sorted(expected))} differs); rerun the same command to be told "
-            "how it differs from the stored run"
-        )
-
-
-def code_version() -> str:
-    """The version of copi that computes a run's results (part of every run's identity:
-    results from another version are another run)."""
-    from copi import __version__
-
-    return __version__
-
-
-class RunIdentity:
-    """For a frozen dataclass with ``capabilities`` (a path) and ``capabilities_sha``
-    fields, and optionally ``world_file`` and ``world_file_sha``: its identity is
-    everything but the paths, the files' content hashes and copi's version included, so
-    that a changed input never resumes into results made from the old one."""
-
-    capabilities: str | None
-    capabilities_sha: str
-
-    def resolved(self) -> Any:
-        """The config with its input files' content hashes (checks the capabilities
-        load)."""
-        changes: dict[str, Any] = {}
-        if self.capabilities is not None:
-            Capabilities.load(self.capabilities)
-            changes["capabilities_sha"] = file_sha(self.capabilities)
-        world_file = getattr(self, "world_file", None)
-        if world_file is not None:
-            changes["world_file_sha"] = file_sha(world_file)
-        elif hasattr(self, "inputs") and hasattr(self, "family"):
-            from copi.world import family_inputs
-
-            changes["inputs"] = family_inputs(getattr(self, "family"))  # noqa: B009
-        method = getattr(self, "method", None)
-        if hasattr(self, "inputs") and isinstance(method, str):
-            from copi.experiments.methods import method_spec
-
-            extra = method_spec(method).input_hashes()
-            if extra:
-                changes["inputs"] = {**changes.get("inputs", {}), **extra}
-        return dataclasses.replace(self, **changes)  # type: ignore[type-var]
-
-    def identity(self) -> dict[str, Any]:
-        """What makes two runs the same run (input paths excluded, their contents and
-        copi's version included)."""
-        d = dataclasses.asdict(self)  # type: ignore[call-overload]
-        d.pop("capabilities")
-        d.pop("world_file", None)
-        d.update(d.pop("inputs", None) or {})  # a family's data, where it draws from any
-        d["code"] = code_version()
-        return d
-
-    def run_id(self) -> str:
-        return hashlib.sha256(json.dumps(self.identity(), sort_keys=True).encode()).hexdigest()[:16]
-
-    def run_into(
-        self,
-        output: str | os.PathLike[str],
-        *,
-        experiment: str,
-        method: str,
-        table: str,
-        total: int,
-        item: Callable[[Any, int], Any],
-        unit: str,
-        chunk: int,
-        workers: int = 1,
-        scheduler: str | None = None,
-        progress: Callable[[int, int], None] | None = None,
-    ) -> str:
-        """Run (or resume) this one-run experiment's items 0 .. total - 1
-        (``item(config, k)``, a module-level function) into ``output`` through
-        :func:`run_series`; returns the run id."""
-        run_id = self.run_id()
-        series = Series(run_id, experiment, method, self.identity(), table, total)
-        run_series(self, output, [series], work=_Single(item), unit=unit, workers=workers,
-                   scheduler=scheduler, progress=progress, chunk=chunk)  # fmt: skip
-        return run_id
 
 
 def execute(
@@ -210,8 +96,6 @@ def execute(
     cluster in chunks of at most ``chunk`` (``many(config, items)``, which must pickle).
     On any exception the chunks not started are cancelled; ``stopping`` wraps the whole
     (e.g. the one-line Ctrl-C message)."""
-    from copi.experiments.executor import InlineExecutor, make_executor
-
     with stopping, make_executor(workers, scheduler) as pool:
         if isinstance(pool, InlineExecutor):
             for item in items:
@@ -274,8 +158,6 @@ def run_series(
     a pool or Dask cluster, which must pickle it), and commit each result as it comes
     back, so that an interrupted run resumes where it stopped. ``progress(done, total)``
     counts (series, item) pairs; ``unit`` names them in the Ctrl-C message."""
-    from copi.experiments.store import ResultsStore
-
     with ResultsStore(output) as store:
         missing: dict[tuple[Any, int], list[Series]] = {}
         total = 0
@@ -314,6 +196,32 @@ def run_series(
             commit=commit, workers=workers, scheduler=scheduler, chunk=chunk,
             stopping=stops_cleanly(tally, output, unit, saved),
         )  # fmt: skip
+
+
+def run_one(
+    config: Any,
+    identity: dict[str, Any],
+    output: str | os.PathLike[str],
+    *,
+    experiment: str,
+    method: str,
+    table: str,
+    total: int,
+    item: Callable[[Any, int], Any],
+    unit: str,
+    chunk: int,
+    workers: int = 1,
+    scheduler: str | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> str:
+    """Run (or resume) an experiment of one run, items 0 .. total - 1 (``item(config,
+    k)``, a module-level function), into ``output`` through :func:`run_series`; returns
+    the run id (:func:`~copi.runs.run_id` of ``identity``)."""
+    rid = run_id(identity)
+    series = Series(rid, experiment, method, identity, table, total)
+    run_series(config, output, [series], work=_Single(item), unit=unit, workers=workers,
+               scheduler=scheduler, progress=progress, chunk=chunk)  # fmt: skip
+    return rid
 
 
 class _Single:

@@ -8,8 +8,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from copi.ceilings._field import GoalField
-from copi.ceilings._kernels import spacetime_astar
+from copi.bounds._field import GoalField
+from copi.bounds._kernels import spacetime_astar
 from copi.core import Agent, Observation, Task, check_sensing
 from copi.errors import InvalidArgumentError
 

@@ -13,11 +13,17 @@ from numpy.typing import NDArray
 
 from copi.core import Observation, Task
 from copi.errors import InvalidArgumentError
-from copi.world._generate import WorldParams, random_world
-from copi.world._io import load_worlds
-from copi.world._sensor import RangeSensor
-from copi.world._simulator import Simulator, StepResult
-from copi.world._world import ObstacleSpec, World
+from copi.world import (
+    ObstacleSpec,
+    RangeSensor,
+    Simulator,
+    StepResult,
+    World,
+    WorldParams,
+    load_worlds,
+    random_world,
+    render_rgb,
+)
 
 __all__ = ["NavigationEnv"]
 
@@ -277,8 +283,6 @@ class NavigationEnv(gymnasium.Env[ObsType, ObsType]):
             return None
         if self.sim is None:
             raise gymnasium.error.ResetNeeded("call reset() before render()")
-        from copi.world._render import render_rgb
-
         return render_rgb(self.sim, pixels=self.width, height=self.height)
 
 

@@ -19,7 +19,7 @@ import numpy as np
 from numba import njit, types
 from numba.typed import Dict
 
-from copi.ceilings._field import field_at
+from copi.bounds._field import field_at
 from copi.geometry.kernels import (
     closest_approach,
     escapes,

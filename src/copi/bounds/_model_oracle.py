@@ -9,9 +9,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from copi.ceilings._clairvoyant import compass_moves
-from copi.ceilings._field import GoalField
-from copi.ceilings._kernels import (
+from copi.bounds._clairvoyant import compass_moves
+from copi.bounds._field import GoalField
+from copi.bounds._kernels import (
     escape_move,
     field_grid,
     hindsight_values,

@@ -1,0 +1,23 @@
+"""Bounds: what any method could do in an episode, run beside the methods.
+
+- :class:`Clairvoyant` (level ``future``): knows the obstacles' whole future and searches
+  space and time for a contact-free path, replayed through the simulator: the share of
+  episodes solvable at all.
+- :class:`ModelOracle` (level ``oracle`` plus the obstacles' motion model): plans
+  against sampled futures of the obstacles' random walk, replanning every step: what an
+  agent that knows the present and how the world moves, but not its future, can expect.
+
+Both are marked as bounds in every table (:attr:`copi.methods.MethodSpec.bound`).
+"""
+
+from copi.bounds._clairvoyant import Clairvoyant, compass_moves
+from copi.bounds._field import GoalField
+from copi.bounds._model_oracle import TURN_SD, ModelOracle
+
+__all__ = [
+    "Clairvoyant",
+    "GoalField",
+    "ModelOracle",
+    "TURN_SD",
+    "compass_moves",
+]

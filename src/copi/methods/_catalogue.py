@@ -1,0 +1,152 @@
+"""copi's built-in methods: its modes, the baselines, the peers and the bounds, each one
+registration (the mechanism is :mod:`copi.methods._registry`; importing
+:mod:`copi.methods` registers these once, then seals them against replacement by
+accident)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from copi._files import file_sha
+from copi.baselines import (
+    DWA,
+    NAVGROUND_BEHAVIORS,
+    VFH,
+    CompassGuard,
+    NavgroundAgent,
+    PPOAgent,
+    Replan,
+    Straight,
+    TangentBug,
+    TrackedMPC,
+    navground_available,
+    packaged_policy,
+)
+from copi.bounds import Clairvoyant, ModelOracle
+from copi.core import Agent
+from copi.methods._registry import REGISTRY, register_method
+from copi.online import CopiAgent, LearntAgent
+
+__all__: list[str] = []
+
+
+def _navground(behavior: str) -> Callable[..., Agent]:
+    def make(*, safety_margin: float = 0.3, horizon: float = 5.0) -> Agent:
+        return NavgroundAgent(behavior, safety_margin=safety_margin, horizon=horizon)
+
+    make.__name__ = f"navground_{behavior.lower()}"
+    return make
+
+
+_RL_POLICIES = [
+    ("ppo", "ppo-mix", 0.0, "a local policy learnt by PPO (deep RL, 2M steps) on all five "
+     "families, under the level's global direction; nothing hand-written"),
+    ("ppo-guard", "ppo-mix", 1.05, "ppo shielded by compass-guard's hand-written guard"),
+    *[(f"ppo-{f}", f"ppo-{f}", 0.0, f"PPO trained on the {f} family only")
+      for f in ("star", "polygon", "indoor", "maps", "crowd")],
+    ("ppo-chauffeur", "ppo-chauffeur", 0.0, "PPO trained as the evader of the homicidal "
+     "chauffeur (Experiment 2), under the game's direction"),
+]  # fmt: skip
+
+
+def _weights_present(weights: str) -> Callable[[], bool]:
+    return lambda: packaged_policy(weights).is_file()
+
+
+def _weights_hash(weights: str) -> Callable[[], dict[str, str]]:
+    def sha() -> dict[str, str]:
+        path = packaged_policy(weights)
+        return {"weights_sha": file_sha(path)} if path.is_file() else {}
+
+    return sha
+
+
+def _register_builtins() -> None:
+    # Every parameter below equals its class's default: tuned by benchmarks/tune.py
+    # (validation seed 1, all five families, 40 episodes each, four settings per method;
+    # the table is docs/tuning.md). navground's ORCA was not tuned.
+    reg = register_method
+    reg("copi-faithful", CopiAgent, capabilities="faithful", default=True,
+        summary="the paper's chain: learnt contexts, landmarks, symmetry and 4 A* policies "
+        "per template; no hand-written avoidance")
+    reg("copi-extended", CopiAgent, capabilities="extended", default=True,
+        params={"guard": 1.05},
+        summary="the chain with 16 policies per template; each candidate checked against the "
+        "live reading by a hand-written guard, which escapes when none is safe")
+    reg("copi-learnt", LearntAgent, capabilities="learnt", default=True,
+        summary="16 compass moves scored by the route and by learnt safety (a network over "
+        "the reading turned to each move, trained on counterfactual probes of a task-free "
+        "exploration, shared by every direction through the symmetry); compass-guard's "
+        "hand-written guard kept as a filter")
+    # The learnt preset's ablations: -priors and -persist differ from copi-learnt in one
+    # thing each, -motion from -priors in its contexts and its prior weight;
+    # compass-guard is copi-learnt with nothing learnt (alpha = beta = 0), its guard
+    # tuned on its own. Every weight: docs/tuning.md.
+    reg("copi-learnt-priors", LearntAgent, capabilities="learnt", ablation=True,
+        params={"beta": 1.0},
+        summary="copi-learnt plus the per-template safety priors (contexts of the reading "
+        "alone, each move read through the template's symmetry) in each move's score")
+    reg("copi-learnt-motion", LearntAgent, capabilities="learnt-motion", ablation=True,
+        params={"beta": 0.5},
+        summary="copi-learnt-priors with contexts that see motion: context map, landmarks, "
+        "templates and their priors over [reading, its change]")
+    reg("copi-learnt-persist", LearntAgent, capabilities="learnt", ablation=True,
+        params={"persist": 0.05},
+        summary="copi-learnt whose last move scores more while the reading stays within its "
+        "landmark (policies that last, paper §V)")
+    reg("copi-learnt-continual", LearntAgent, capabilities="learnt",
+        params={"continual": True},
+        summary="copi-learnt growing contexts for unfamiliar readings online (paper §II-A, "
+        "§III); in a lifelong run the grown contexts are kept")
+    reg("straight", Straight, default=True,
+        summary="the global direction, no avoidance (hand-written, nothing tuned)")
+    reg("compass-guard", CompassGuard, default=True,
+        summary="copi-extended's hand-written guard over 16 compass moves, no capabilities "
+        "(ablation of the learnt part)")
+    reg("vfh", VFH, default=True,
+        summary="Vector Field Histogram (VFH+) on the ranges (hand-written)")
+    reg("dwa", DWA, default=True,
+        summary="Dynamic Window: sampled velocities scored on the ranges (hand-written)")
+    reg("tangent-bug", TangentBug, default=True,
+        summary="TangentBug on the ranges (hand-written)")
+    # the model-oracle's planner on what a map-level agent makes out (0.3-3 s an episode,
+    # so run apart like model-oracle: --methods tracked-mpc)
+    reg("tracked-mpc", TrackedMPC, sensing="map", default=False,
+        summary="model-predictive control (the model-oracle's planner) on the discs it makes "
+        "out in its reading (circle fits of the hits the map does not explain, velocities "
+        "from their last displacement), their speed and turn spread estimated from its own "
+        "tracks (hand-written; nothing learnt offline)")
+    reg("replan", Replan, sensing="oracle", default=True,
+        summary="shortest path on the current snapshot, obstacles inflated, re-planned "
+        "(hand-written; sees every obstacle)")
+    # Learnt by deep RL on copi's episodes (copi rl train; the weights ship in
+    # copi/data/rl with the commands that trained them). A policy absent is left out.
+    for name, weights, guard, summary in _RL_POLICIES:
+        reg(name, PPOAgent, default=name in ("ppo", "ppo-guard"), requires="rl-weights",
+            available=_weights_present(weights), inputs=_weights_hash(weights),
+            params={"weights": weights, "guard": guard}, summary=summary,
+            missing=f"its trained weights {weights}.npz, which copi does not ship here: train "
+            f"them with copi rl train -o {weights}.npz (docs: copi against deep RL)")
+    # Bounds, not methods: what is possible (marked so in every table and figure).
+    reg("clairvoyant", Clairvoyant, sensing="future", default=True, bound=True,
+        summary="a bound: space-time A* on the obstacles' recorded future (they ignore the "
+        "agent), its plan replayed through the simulator: the share of episodes solvable")
+    # model-oracle costs 0.2-2 s an episode (10-20 ms a step): not in the default run; run it
+    # on fewer episodes into the same directory, the report pairs it on those.
+    reg("model-oracle", ModelOracle, sensing="oracle", default=False, bound=True,
+        summary="a bound: model-predictive control on 32 sampled futures of the obstacles' "
+        "random walk (its true parameters), each solved in hindsight and the costs averaged, "
+        "replanned every step; knows the present and the motion model, not the future "
+        "(hand-written, tuned on seed 1; 1-3 s an episode, so run apart: --methods "
+        "model-oracle)")
+    margins = {"navground-hrvo": 0.6, "navground-hl": 0.3, "navground-orca": 0.3}
+    for name, behavior in NAVGROUND_BEHAVIORS.items():
+        reg(name, _navground(behavior), sensing="oracle", requires="peers",
+            available=navground_available, default=name != "navground-orca",
+            missing="navground, which is not installed: pip install 'copi[peers]'",
+            params={"safety_margin": margins[name]},
+            summary=f"navground's {behavior} (sees obstacle positions and velocities)")
+
+
+_register_builtins()
+REGISTRY.seal()

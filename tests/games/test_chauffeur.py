@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import csv
 import math
-import warnings
 
 import numpy as np
 import pytest
@@ -12,7 +11,6 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
 
-from copi.envs.chauffeur import parallel_env
 from copi.errors import InvalidArgumentError
 from copi.games import (
     ChauffeurGame,
@@ -161,15 +159,3 @@ def test_bad_parameters() -> None:
         critical_beta(1.0)
 
 
-def test_pettingzoo_parallel_api() -> None:
-    from pettingzoo.test import parallel_api_test
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
-        parallel_api_test(parallel_env(), num_cycles=200)
-        parallel_api_test(parallel_env(dynamic=False), num_cycles=100)
-    env = parallel_env(render_mode="rgb_array")
-    obs, _ = env.reset(seed=1)
-    assert obs["evader"].shape == (36,) and obs["pursuer"].shape == (2,)
-    img = env.render()
-    assert img is not None and img.shape[2] == 3

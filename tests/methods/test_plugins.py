@@ -15,7 +15,7 @@ from copi.testing import check_agent
 from copi.world import family_names, register_family, sample_world, unregister_family
 from tests.cli.test_faults import _one_line_error, run
 
-PLUGIN = Path(__file__).resolve().parent / "plugin"
+PLUGIN = Path(__file__).resolve().parents[1] / "plugin"
 
 
 @pytest.fixture

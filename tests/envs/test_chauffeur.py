@@ -1,4 +1,8 @@
+"""The homicidal chauffeur as a PettingZoo ParallelEnv: the API, and what it draws."""
+
 from __future__ import annotations
+
+import warnings
 
 import numpy as np
 
@@ -32,3 +36,17 @@ def test_render_draws_the_pursuer_and_no_goal() -> None:
     cy = 200 - scale * (env.game.car.position[1] - 0.5 * (ymin + ymax))
     assert _near(img, PURSUER, np.array([round(cx), round(cy)]), 6) > 10
     assert _near(img, GOAL, np.array([200, 200]), 200) == 0  # no goal star anywhere
+
+
+def test_pettingzoo_parallel_api() -> None:
+    from pettingzoo.test import parallel_api_test
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        parallel_api_test(parallel_env(), num_cycles=200)
+        parallel_api_test(parallel_env(dynamic=False), num_cycles=100)
+    env = parallel_env(render_mode="rgb_array")
+    obs, _ = env.reset(seed=1)
+    assert obs["evader"].shape == (36,) and obs["pursuer"].shape == (2,)
+    img = env.render()
+    assert img is not None and img.shape[2] == 3

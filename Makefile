@@ -38,7 +38,7 @@ run: install
 	$(BIN)/copi world show $(RESULTS)/worlds/worlds.json -o $(RESULTS)/worlds --gif
 
 lint: install
-	$(BIN)/ruff check src tests benchmarks
+	$(BIN)/ruff check src tests benchmarks studies tools
 
 typecheck: install
 	$(BIN)/mypy

@@ -1,4 +1,4 @@
-"""The crowd safety-information benchmark (benchmarks/safety_information.py) runs end to
+"""The crowd safety-information benchmark (studies/safety_information.py) runs end to
 end on a small case and reports what it says it reports."""
 
 from __future__ import annotations
@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from benchmarks import safety_information
+from studies import safety_information
 
 
 def test_the_safety_information_benchmark_runs(learnt_caps: Path, tmp_path: Path) -> None:

@@ -11,7 +11,7 @@ OUTSIDE = ("../shared", "shared/data", 'parents[3] / "shared"', "parent / \"shar
 
 def test_nothing_reads_beside_the_repository() -> None:
     places = [ROOT / "Makefile", ROOT / ".ci" / "run", ROOT / "README.md", ROOT / "pyproject.toml"]
-    for folder in ("src", "tests", "benchmarks", "docs"):
+    for folder in ("src", "tests", "benchmarks", "studies", "tools", "docs"):
         places += [p for p in (ROOT / folder).rglob("*") if p.suffix in (".py", ".md", ".toml")]
     offenders = []
     for p in places:

@@ -20,7 +20,7 @@ export PYTHONPATH=src
 took() { local s=$(( $(date +%s) - $1 )); echo "$((s / 60)) min $((s % 60)) s"; }
 
 t=$(date +%s)
-$BIN/python benchmarks/tune.py --episodes 100 --workers 2
+$BIN/python studies/tune.py --episodes 100 --workers 2
 
 t=$(date +%s)
 $BIN/copi reproduce -o "$R/"
@@ -29,10 +29,10 @@ $BIN/python tools/report_page.py "$R/report.md" docs/reproduce.md \
     --command "copi reproduce -o results/ (seed 0, $(took "$t") on 2 cores)" \
     --about "The report \`copi reproduce\` writes; [the experiments, read](analysis/experiments.md) explains it."
 
-$BIN/python benchmarks/ceilings.py --bench "$R/ceilings" --episodes 200 --oracle-episodes 200
+$BIN/python studies/ceilings.py --bench "$R/ceilings" --episodes 200 --oracle-episodes 200
 # on the ceilings' store: the bounds page with the RL rows (its rl.md is overwritten next)
-$BIN/python benchmarks/rl_experiments.py --bench "$R/ceilings" --episodes 200 --games 200
-$BIN/python benchmarks/rl_experiments.py --bench "$R/rl-bench" --episodes 200 --games 200
+$BIN/python studies/rl_experiments.py --bench "$R/ceilings" --episodes 200 --games 200
+$BIN/python studies/rl_experiments.py --bench "$R/rl-bench" --episodes 200 --games 200
 
 t=$(date +%s)
 $BIN/copi benchmark -o "$R/bench-ablations" --episodes 500 --workers 2 --methods ablations
@@ -49,8 +49,8 @@ $BIN/python tools/benchmark_page.py "$R/bench-mapping" docs/benchmark-mapping.md
     --what "200 episodes at level sensor, heading for the goal and with a map built on the fly" \
     --command "\`copi benchmark -o results/bench-mapping --episodes 200 --methods $M\` (seed 0; $(took "$t") on 2 cores)"
 
-$BIN/python benchmarks/landmarks.py --seeds 10 --workers 2 --out docs/landmarks.md
-$BIN/python benchmarks/landmarks_effect.py --episodes 200 --seeds 0,1,2,3,4 \
+$BIN/python studies/landmarks.py --seeds 10 --workers 2 --out docs/landmarks.md
+$BIN/python studies/landmarks_effect.py --episodes 200 --seeds 0,1,2,3,4 \
     --out docs/landmarks-effect.md
 
 t=$(date +%s)
@@ -62,6 +62,6 @@ $BIN/python tools/report_page.py "$R/lifelong-maps/run.md" docs/lifelong-maps.md
     --title "Experiment 3 in the maps family: continual contexts in unfamiliar worlds" \
     --command "copi lifelong results/capabilities-learnt.npz -o results/lifelong-maps/run.sqlite $L ($(took "$t") on 2 cores)"
 
-$BIN/python benchmarks/families.py --n 200 --seed 0 --pictures docs --into docs/families.md
+$BIN/python studies/families.py --n 200 --seed 0 --pictures docs --into docs/families.md
 $BIN/python tools/update_docs.py
 echo "regenerate_pages: every page rewritten from $R"

@@ -19,8 +19,8 @@ from copi.errors import CapabilitiesFormatError, InvalidArgumentError
 from copi.learning import Capabilities, LearnParams, learn, simulated_steps
 from copi.learning._safety import (
     SafetyModel,
-    _probe_row,
     predict,
+    probe_actions,
     probe_states,
     second_move_clear,
     template_priors,
@@ -382,13 +382,13 @@ def test_an_escape_probe_judges_the_first_move_by_the_moves_it_leaves() -> None:
     is met by the first step towards it (closest approach 0): unsafe by both."""
     sim, actions = _head_on(23.5)
     seconds = np.ascontiguousarray(np.vstack([actions[:16], 0.5 * actions[:16], [[0, 0]]]))
-    hold = _probe_row(sim, actions, 3, "hold", seconds)
-    escape = _probe_row(sim, actions, 3, "escape", seconds)
+    hold = probe_actions(sim, actions, 3, "hold", seconds)
+    escape = probe_actions(sim, actions, 3, "escape", seconds)
     assert not hold[0] and escape[0]
     assert hold[8] and escape[8]  # west: away from the disc
     near, _ = _head_on(21.6)
-    assert not _probe_row(near, actions, 3, "hold", seconds)[0]
-    assert not _probe_row(near, actions, 3, "escape", seconds)[0]
+    assert not probe_actions(near, actions, 3, "hold", seconds)[0]
+    assert not probe_actions(near, actions, 3, "escape", seconds)[0]
     # the probe forks: the simulator itself has not moved
     assert sim.t == 0 and sim.centers[0, 0] == 23.5
 

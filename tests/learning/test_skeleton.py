@@ -231,7 +231,7 @@ def test_the_rules_of_earlier_versions_stay_named_options() -> None:
 @pytest.mark.slow
 def test_the_landmark_count_moves_little_with_the_seed() -> None:
     """The goals at copi learn's defaults: over 5 whole-pipeline seeds max / min <= 1.5,
-    over 5 map seeds on the same readings <= 1.25 (benchmarks/landmarks.py measures 10)."""
+    over 5 map seeds on the same readings <= 1.25 (studies/landmarks.py measures 10)."""
     from copi.learning import LearnParams, learn
 
     whole = [learn(LearnParams(seed=s, workers=2)).landmarks.n_landmarks for s in range(5)]

@@ -21,7 +21,14 @@ from copi.learning._policies import (
     compass,
     local_world,
 )
-from copi.learning._safety import SafetyModel
+from copi.learning._safety import (
+    Probes,
+    SafetyModel,
+    design_matrix,
+    fork_simulator,
+    predict,
+    probe_actions,
+)
 from copi.learning._skeleton import Landmarks, bootstrap_landmarks, skeletonize
 from copi.learning._symmetry import (
     Operator,
@@ -45,15 +52,20 @@ __all__ = [
     "PermutationAutomaton",
     "PolicyLearner",
     "PolicySet",
+    "Probes",
     "Reduction",
     "SafetyModel",
     "SymmetryGroup",
     "ValueIterationLearner",
     "bootstrap_landmarks",
     "compass",
+    "design_matrix",
     "explore",
+    "fork_simulator",
     "learn",
     "local_world",
+    "predict",
+    "probe_actions",
     "reduce_landmarks",
     "ring_operators",
     "simulated_steps",

@@ -56,8 +56,13 @@ from copi.world import RandomWalk, RangeSensor, Simulator, random_world, sample_
 
 __all__ = [
     "PROBE_LABELS",
+    "Probes",
     "SafetyModel",
+    "design_matrix",
+    "fork_simulator",
     "learn_safety",
+    "predict",
+    "probe_actions",
     "probe_states",
 ]
 
@@ -99,7 +104,7 @@ class Probes:
                       self.static[rows])  # fmt: skip
 
 
-def _fork(sim: Simulator) -> Simulator:
+def fork_simulator(sim: Simulator) -> Simulator:
     """A copy of ``sim`` whose future obstacle motion is the same as ``sim``'s (the world
     shared, the mutable state and the random generator's state copied)."""
     c = copy.copy(sim)
@@ -141,20 +146,20 @@ def second_move_clear(qx, qy, r, segs, c1, c2, radii, moves, clear):  # type: ig
                    c1.shape[0], clear)  # fmt: skip
 
 
-def _probe_row(sim: Simulator, actions: NDArray[np.float64], horizon: int, label: str,
+def probe_actions(sim: Simulator, actions: NDArray[np.float64], horizon: int, label: str,
                seconds: NDArray[np.float64]) -> NDArray[np.bool_]:
     """Each action's probe outcome from ``sim``'s state (see the module's docstring)."""
     row = np.empty(len(actions), dtype=bool)
     if label == "escape":
         # the obstacles' next two positions: they do not depend on the agent's moves
-        ahead = _fork(sim)
+        ahead = fork_simulator(sim)
         ahead.step(np.zeros(2))
         c1 = ahead.centers.copy()
         ahead.step(np.zeros(2))
         c2 = ahead.centers.copy()
         segs = np.ascontiguousarray(sim.world.segments)
     for a, act in enumerate(actions):
-        c = _fork(sim)
+        c = fork_simulator(sim)
         if label == "escape":
             row[a] = not c.step(act).contact and second_move_clear(
                 c.position[0], c.position[1], c.agent_radius, segs, c1, c2, sim.radii,
@@ -211,7 +216,7 @@ def probe_states(
         blocked = False
         for t in range(steps):
             if t % every == 0:
-                row = _probe_row(sim, actions, horizon, label, seconds)
+                row = probe_actions(sim, actions, horizon, label, seconds)
                 readings.append(sim.ranges.copy())
                 previous.append(prev)
                 safe.append(row)
@@ -227,7 +232,7 @@ def probe_states(
     return Probes(np.array(readings), np.array(previous), np.array(safe), np.array(statics))
 
 
-def _design(probes: Probes, n_directions: int) -> tuple[Any, ...]:
+def design_matrix(probes: Probes, n_directions: int) -> tuple[Any, ...]:
     """Rows (features turned to each direction, plain and mirrored) and labels of the
     direction model; rows and labels of the wait model (each state in the frame of
     direction 0, plain and mirrored)."""
@@ -325,7 +330,7 @@ def learn_safety(
     m = len(probes.readings)
     cut = max(1, int(0.8 * m))
     train, test = probes[:cut], probes[cut:]
-    xd, yd, xw, yw = _design(train, n_dir)
+    xd, yd, xw, yw = design_matrix(train, n_dir)
     w_dir, w_wait = _fit(xd, yd, seed), _fit(xw, yw, seed)
     stats: dict[str, float] = {
         "probed_states": float(m),
@@ -333,7 +338,7 @@ def learn_safety(
         "wait_safe_share": float(probes.safe[:, n_dir].mean()),
     }
     if len(test.readings):
-        txd, tyd, _, _ = _design(test, n_dir)
+        txd, tyd, _, _ = design_matrix(test, n_dir)
         score = predict(w_dir, txd)
         if 0 < tyd.sum() < len(tyd):
             stats["heldout_auc"] = float(roc_auc_score(tyd, score))

@@ -282,7 +282,7 @@ def bootstrap_landmarks(
     the seed: on the default ``learn`` data the knee of single maps gave 23 to 95
     landmarks over five seeds. The rule's choice on one map is a noisy estimate of the
     choice on the data; its median over maps of resampled data is not (over five seeds,
-    ten with ``benchmarks/landmarks.py``: max / min 1.16 over whole pipelines, 1.06 over
+    ten with ``studies/landmarks.py``: max / min 1.16 over whole pipelines, 1.06 over
     map seeds on the same readings). Resample b draws its readings and its map from
     ``default_rng([seed, 1000 + b])``, so the result does not depend on ``workers``.
 

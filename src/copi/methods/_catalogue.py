@@ -62,7 +62,7 @@ def _weights_hash(weights: str) -> Callable[[], dict[str, str]]:
 
 
 def _register_builtins() -> None:
-    # Every parameter below equals its class's default: tuned by benchmarks/tune.py
+    # Every parameter below equals its class's default: tuned by studies/tune.py
     # (validation seed 1, all five families, 40 episodes each, four settings per method;
     # the table is docs/tuning.md). navground's ORCA was not tuned.
     reg = register_method

@@ -6,7 +6,14 @@ trained policy does not."""
 from __future__ import annotations
 
 from copi.envs.local_policy import TRAINING_SEED, LocalPolicyEnv, Reward
-from copi.rl._train import VALIDATION_SEED, RLMissingError, TrainConfig, rl_available, train
+from copi.rl._train import (
+    VALIDATION_SEED,
+    RLMissingError,
+    TrainConfig,
+    rl_available,
+    train,
+    validation_success,
+)
 
 __all__ = [
     "LocalPolicyEnv",
@@ -17,4 +24,5 @@ __all__ = [
     "VALIDATION_SEED",
     "rl_available",
     "train",
+    "validation_success",
 ]

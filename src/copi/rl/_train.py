@@ -29,7 +29,14 @@ from copi.reports import finish_figure, new_figure
 from copi.runs import Episode
 from copi.world import check_family
 
-__all__ = ["RLMissingError", "TrainConfig", "export_policy", "rl_available", "train"]
+__all__ = [
+    "RLMissingError",
+    "TrainConfig",
+    "export_policy",
+    "rl_available",
+    "train",
+    "validation_success",
+]
 
 VALIDATION_SEED = 1
 """The learning curve is measured on episodes of this seed (tuning's; reports use 0)."""
@@ -76,7 +83,7 @@ class TrainConfig:
     """Environments stepped together (a vectorised environment in this process)."""
     learning_rate: float = 1e-3
     """With ``log_std`` -1, the setting chosen among five on validation seed 1
-    (``benchmarks/rl_train_all.py --tune``; SB3's defaults are 3e-4 and 0)."""
+    (``studies/rl_train_all.py --tune``; SB3's defaults are 3e-4 and 0)."""
     n_steps: int = 256
     """Steps per environment between updates."""
     batch_size: int = 256

@@ -1,7 +1,7 @@
 """Tune every method's parameters on validation episodes (seed 1), disjoint from the
 reported ones (seed 0), with the same budget of four settings per method.
 
-    python benchmarks/tune.py --episodes 100 --workers 2
+    python studies/tune.py --episodes 100 --workers 2
 
 Prints, per method, success and median excess of each setting, and the chosen one (the
 highest success; within one point, the lower median excess). A chosen value lives in
@@ -115,7 +115,7 @@ def main() -> None:
         f"# Tuning (validation seed {SEED}, families {a.families}, {a.episodes} episodes "
         "each, level map; oracle for oracle methods)",
         "",
-        "<!-- generated: written whole by benchmarks/tune.py -->",
+        "<!-- generated: written whole by studies/tune.py -->",
         "",
         "| method | setting | success | collision | median excess | chosen | registered |",
         "|---|---|---|---|---|---|---|",

@@ -2,7 +2,7 @@
 copi 0.2's rule (``skeleton_bootstrap=0``, the knee of the map's own H(k)), run on the
 same episodes, paired.
 
-    python benchmarks/landmarks_effect.py --episodes 200 --seeds 0,1,2,3,4 \
+    python studies/landmarks_effect.py --episodes 200 --seeds 0,1,2,3,4 \
         --out docs/landmarks-effect.md
 
 Experiment 1 (1549 of the paper's worlds, level map) in the faithful and extended modes,
@@ -74,10 +74,10 @@ def main() -> None:
             caps[rule][name] = str(path)
             counts[rule][name] = f"{c.landmarks.n_landmarks} ({len(c.reduction.templates)})"
     lines = [
-        "# The landmark rule downstream (`python benchmarks/landmarks_effect.py "
+        "# The landmark rule downstream (`python studies/landmarks_effect.py "
         f"--episodes {a.episodes} --seeds {a.seeds}`)",
         "",
-        "<!-- generated: written whole by benchmarks/landmarks_effect.py -->",
+        "<!-- generated: written whole by studies/landmarks_effect.py -->",
         "",
         f"Learning seed {seeds[0]}, episodes of seed 0. Landmarks (templates): "
         + "; ".join(f"{n}: {counts['new'][n]} now, {counts['old'][n]} with copi 0.2's rule"

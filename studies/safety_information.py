@@ -2,13 +2,13 @@
 the model-oracle's own check of a move, judged on the states copi-learnt visits, and
 copi's choice with either in its hands.
 
-    python benchmarks/safety_information.py --caps CAPS --episodes 200 \\
+    python studies/safety_information.py --caps CAPS --episodes 200 \\
         --out results/safety-information.json
 
 1. **Visited states.** copi-learnt (capabilities ``--caps``; ``--alpha``, ``--guard``)
    drives ``--episodes`` crowd episodes of seed ``--visit-seed`` (never reported) at
    level map. At each decision, every compass direction is probed with the ``escape``
-   label on the episode's own future (:func:`copi.learning._safety._probe_row`), and
+   label on the episode's own future (:func:`copi.learning.probe_actions`), and
    given the oracle's probability of that label: the share of ``--futures`` futures,
    drawn from the true present with the true motion model (the simulator forked, its
    random generator reseeded), in which the direction's probe is safe. Printed: the
@@ -73,12 +73,12 @@ def _oracle_p(
     true motion model) in which its escape probe is safe; with ``keep``, only those
     discs, and their headings the true ones (``"true"``), unknown (``"none"``: drawn
     uniformly) or known to within one step's turn (``"turn"``)."""
-    from copi.learning._safety import _fork, _probe_row
+    from copi.learning import fork_simulator, probe_actions
 
     _, actions, seconds = _moves()
     acc = np.zeros(len(actions))
     for j in range(futures):
-        f = _fork(sim)
+        f = fork_simulator(sim)
         if keep is not None:
             f.centers = f.centers[keep].copy()
             f.radii = np.ascontiguousarray(f.radii[keep])
@@ -88,7 +88,7 @@ def _oracle_p(
             f.headings = f.rng.uniform(0, 2 * np.pi, len(f.radii))
         elif headings == "turn":
             f.headings = f.headings + f.rng.normal(0, sim.turn_sd, len(f.radii))
-        acc += _probe_row(f, actions, 3, "escape", seconds)
+        acc += probe_actions(f, actions, 3, "escape", seconds)
     return acc / futures
 
 
@@ -106,7 +106,7 @@ def _visible(sim: Any) -> np.ndarray:
 
 def _visit(args: tuple[str, int, int, float, float, int, bool]) -> dict[str, Any]:
     """copi-learnt through one episode, each decision's state probed."""
-    from copi.learning._safety import _probe_row
+    from copi.learning import probe_actions
     from copi.methods import make_agent
     from copi.runs import draw_episode, run_episode
 
@@ -122,7 +122,7 @@ def _visit(args: tuple[str, int, int, float, float, int, bool]) -> dict[str, Any
     def probing(obs: Any) -> Any:
         rows["s"].append(obs.ranges.copy())
         rows["static"].append(obs.static.copy())
-        rows["label"].append(_probe_row(sim, actions, 3, "escape", seconds))
+        rows["label"].append(probe_actions(sim, actions, 3, "escape", seconds))
         key = (k, len(rows["s"]))
         rows["oracle"].append(_oracle_p(sim, key, futures))
         if decompose:
@@ -196,7 +196,7 @@ def main(argv: list[str] | None = None) -> int:
     a = ap.parse_args(argv)
     from sklearn.metrics import roc_auc_score
 
-    from copi.learning._safety import Probes, _design, predict
+    from copi.learning import Probes, design_matrix, predict
 
     caps = _setup(a.caps)
     result: dict[str, Any] = {"caps": str(a.caps), "episodes": a.episodes,
@@ -211,7 +211,7 @@ def main(argv: list[str] | None = None) -> int:
     label = np.concatenate([v["label"] for v in visits])
     oracle = np.concatenate([v["oracle"] for v in visits])
     seen = static if caps.safety.static_aware else np.full(s.shape, np.inf)
-    x, y, _, _ = _design(Probes(s, prev, label, seen), 16)
+    x, y, _, _ = design_matrix(Probes(s, prev, label, seen), 16)
     both = 0 < y.sum() < len(y)  # an AUC needs safe and unsafe probes
     net_auc = float(roc_auc_score(y, predict(caps.safety.net[0], x))) if both else None
     oracle_auc = (

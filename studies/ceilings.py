@@ -1,7 +1,7 @@
 """Every family measured against what is possible: the clairvoyant bound and the
 model-predictive oracle beside every method, on the same episodes.
 
-    python benchmarks/ceilings.py --bench results/ceilings --episodes 200 \\
+    python studies/ceilings.py --bench results/ceilings --episodes 200 \\
         --oracle-episodes 200 --out docs/ceilings.md
 
 Runs ``copi benchmark`` three times into one directory (resumable): every default method
@@ -24,7 +24,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from benchmarks._timing import kept_times  # noqa: E402
+from studies._common import kept_times  # noqa: E402
 
 METHODS = ["copi-learnt", "copi-extended", "copi-faithful", "compass-guard", "straight", "vfh",
            "dwa", "tangent-bug", "replan", "navground-hrvo", "navground-hl",
@@ -73,9 +73,9 @@ def main() -> None:
     lines = [
         "# Ceilings: every family against what is possible",
         "",
-        "<!-- generated: written whole by benchmarks/ceilings.py -->",
+        "<!-- generated: written whole by studies/ceilings.py -->",
         "",
-        f"`python benchmarks/ceilings.py --bench {a.bench} --episodes {a.episodes} "
+        f"`python studies/ceilings.py --bench {a.bench} --episodes {a.episodes} "
         f"--oracle-episodes {a.oracle_episodes}` (benchmark seed 0; "
         f"{timing['methods']['seconds'] / 60:.0f} min for the methods and the clairvoyant, "
         f"{timing['oracle']['seconds'] / 60:.0f} min for the oracle, "

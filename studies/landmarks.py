@@ -2,7 +2,7 @@
 the knee of H(k)) beside the rule of copi 0.2 (the knee of the map's own H(k)) and the
 paper's literal one (maximum curvature), paper §II-B.
 
-    python benchmarks/landmarks.py --seeds 10 --workers 2 [--out docs/landmarks.md]
+    python studies/landmarks.py --seeds 10 --workers 2 [--out docs/landmarks.md]
 
 Three studies with the defaults of ``copi learn --preset faithful`` (100 worlds x 300
 steps, two GNG passes, the paper's setup): whole pipelines over seeds 0..n-1, map seeds on
@@ -21,8 +21,14 @@ from pathlib import Path
 
 import numpy as np
 
-from copi.learning import LearnParams, SymmetryGroup, learn, reduce_landmarks, ring_operators
-from copi.learning._skeleton import skeletonize
+from copi.learning import (
+    LearnParams,
+    SymmetryGroup,
+    learn,
+    reduce_landmarks,
+    ring_operators,
+    skeletonize,
+)
 
 STUDIES = {
     "whole pipeline (seed s)": lambda s: {"seed": s},
@@ -53,9 +59,9 @@ def main() -> None:
     a = ap.parse_args()
     t0 = time.perf_counter()
     lines = [
-        f"# Landmarks over {a.seeds} seeds (`python benchmarks/landmarks.py --seeds {a.seeds}`)",
+        f"# Landmarks over {a.seeds} seeds (`python studies/landmarks.py --seeds {a.seeds}`)",
         "",
-        "<!-- generated: written whole by benchmarks/landmarks.py -->",
+        "<!-- generated: written whole by studies/landmarks.py -->",
         "",
         "Counts as landmarks (templates). The defaults of `copi learn --preset faithful`: "
         "100 worlds x 300 steps, the paper's setup (the paper: 593 nodes, 9 landmarks).",

@@ -1,6 +1,6 @@
 """Statistics and pictures of the world families (docs/families.md).
 
-    PYTHONPATH=src python benchmarks/families.py --n 200 --seed 0 --pictures docs
+    PYTHONPATH=src python studies/families.py --n 200 --seed 0 --pictures docs
 
 prints the Markdown table of docs/families.md (``family_stats`` over n tasks per family;
 ``--into docs/families.md`` writes it between the page's ``<!-- table -->`` marks)

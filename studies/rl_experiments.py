@@ -1,10 +1,10 @@
 """copi against deep RL: in family, a new world, a new task, and what each learner costs.
 
-    python benchmarks/rl_experiments.py --bench results/rl-bench --episodes 200 \\
+    python studies/rl_experiments.py --bench results/rl-bench --episodes 200 \\
         --games 200 --out docs/rl.md
 
 Every number is paired on the same episodes (the benchmark's seed 0; the policies were
-trained on training seeds and tuned on validation seed 1, see ``rl_train_all.py``):
+trained on training seeds and tuned on validation seed 1, see ``studies/rl_train_all.py``):
 
 - *in family*: ``ppo-F`` (PPO trained on family F only) on F, beside ``copi-learnt``,
   ``compass-guard``, ``dwa`` and ``ppo`` (trained on the mix of all five);
@@ -17,8 +17,11 @@ trained on training seeds and tuned on validation seed 1, see ``rl_train_all.py`
 - *cost*: each learner's samples and wall time, and where PPO's learning curve (success
   on the validation episodes) crosses copi-learnt's success on the same episodes.
 
-The benchmark part is ``copi benchmark`` (resumable: an interrupted run goes on); the games
-are played here, deterministically from (seed, game).
+Everything runs through copi's runners into result stores in ``--bench`` (resumable: an
+interrupted run goes on where it stopped): the benchmark (``benchmark.sqlite``), copi
+learnt otherwise (``variant-NAME.sqlite``), the other training seeds' policies
+(``seeds.sqlite``) and the games (``chauffeur.sqlite``; ``chauffeur-lean.sqlite`` for copi
+learnt at a hundredth of PPO's samples, the same evader with other capabilities).
 """
 
 from __future__ import annotations
@@ -26,17 +29,29 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import subprocess
 import sys
 import time
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from benchmarks._timing import kept_times  # noqa: E402
+from copi._files import file_sha  # noqa: E402
+from copi.baselines import PPOAgent, packaged_policy  # noqa: E402
+from copi.experiments import (  # noqa: E402
+    BenchmarkConfig,
+    PursuitConfig,
+    ensure_capabilities,
+    pursue,
+    run_benchmark,
+)
+from copi.learning import Capabilities, LearnParams, learn, simulated_steps  # noqa: E402
+from copi.methods import make_agent, method_spec, parse_methods, register_method  # noqa: E402
+from copi.reports import read_benchmark  # noqa: E402
+from copi.results import ResultsStore, paired_difference, summarize_rows  # noqa: E402
+from copi.rl import TrainConfig, validation_success  # noqa: E402
+from studies._common import kept_times  # noqa: E402
 
 FAMILIES = ("star", "polygon", "indoor", "maps", "crowd")
 METHODS = ["copi-learnt", "compass-guard", "dwa", "straight", "ppo", "ppo-guard",
@@ -58,8 +73,6 @@ def _compare(
 ) -> tuple[str, str, bool]:
     """a − b in points on the common episodes with its interval, who is better (named only
     where the interval excludes 0), and whether a is."""
-    from copi.results import paired_difference
-
     common = sorted(set(a) & set(b))
     d = paired_difference([a[k] for k in common], [b[k] for k in common])
     text = f"{100 * d.estimate:+.1f} [{100 * d.low:+.1f}, {100 * d.high:+.1f}]"
@@ -68,26 +81,21 @@ def _compare(
     return text, f"**{who_a}**" if d.estimate > 0 else f"**{who_b}**", d.estimate > 0
 
 
-def run_benchmark(bench: Path, episodes: int, workers: int) -> None:
-    cmd = [sys.executable, "-m", "copi", "benchmark", "-o", str(bench),
-           "--episodes", str(episodes), "--methods", ",".join(METHODS),
-           "--workers", str(workers), "--against", "copi-learnt"]  # fmt: skip
-    subprocess.run(cmd, check=True)
+def benchmark(bench: Path, episodes: int, workers: int) -> None:
+    """Every method of :data:`METHODS` on the benchmark's episodes, into
+    ``bench/benchmark.sqlite``."""
+    arms = tuple(parse_methods(",".join(METHODS)))
+    presets = {p for r in arms if (p := method_spec(r.method).capabilities)}
+    config = BenchmarkConfig(methods=arms, families=FAMILIES, episodes=episodes,
+                             capabilities=ensure_capabilities(bench, presets))  # fmt: skip
+    run_benchmark(config, bench / "benchmark.sqlite", workers=workers)
 
 
-def episodes_won(agent_of: Any, family: str, level: str, episodes: int) -> dict[str, bool]:
-    """Success of ``agent_of()`` (a fresh agent an episode) on the benchmark's episodes
-    0 .. episodes-1 of ``family`` (seed 0) at ``level``, with the benchmark's step limit."""
-    from copi.experiments.benchmark import benchmark_max_steps
-    from copi.runs import draw_episode, optimal_to_goal, run_episode
-
-    won = {}
-    for k in range(episodes):
-        sim = draw_episode(family, k, 0)
-        out = run_episode(agent_of(), sim, sensing=level,
-                          max_steps=benchmark_max_steps(optimal_to_goal(sim)))  # fmt: skip
-        won[str(k)] = out.outcome == "success"
-    return won
+def won(store: Path) -> dict[tuple[str, str, str], dict[int, bool]]:
+    """Success per episode of every (family, method, level) of a benchmark store."""
+    groups, _, _ = read_benchmark(store)
+    return {(fam, arm.method, arm.sensing): _success(rows)
+            for fam, arms in groups.items() for arm, rows in arms.items()}  # fmt: skip
 
 
 STAR_ONLY = {"directions": 16, "safety": True, "probe_families": "star"}
@@ -99,32 +107,24 @@ of 100, 8 probing walks of 60 steps instead of 60 of 150 (18,720 simulated steps
 that budget, not tuned."""
 
 
-def variant(bench: Path, name: str, params: dict, episodes: int,
+def variant(bench: Path, name: str, params: dict, episodes: int, workers: int,
             levels: tuple[str, ...] = ("map", "sensor")) -> tuple[dict, dict, Path]:  # fmt: skip
-    """copi-learnt with capabilities learnt with ``LearnParams(**params)``: success per
-    (family, level) on the benchmark's episodes, its rate, and the capabilities file
-    (both cached in ``bench``)."""
-    from copi.learning import Capabilities, LearnParams, learn
-    from copi.methods import make_agent
-
+    """copi-learnt with capabilities learnt with ``LearnParams(**params)`` on the
+    benchmark's episodes: success per (family, level), its rate, and the capabilities
+    file (learnt once into ``bench``; the episodes in ``bench/variant-NAME.sqlite``)."""
     path = bench / f"capabilities-learnt-{name}.npz"
     if not path.is_file():
         t0 = time.perf_counter()
         learn(LearnParams(**params)).save(path)
-        (bench / f"{name}-learn.json").write_text(json.dumps(
-            {"seconds": time.perf_counter() - t0}))  # fmt: skip
-    cache = bench / f"{name}.json"
-    done = json.loads(cache.read_text()) if cache.is_file() else {}
-    caps = Capabilities.load(path)
-    for fam in FAMILIES:
-        for level in levels:
-            key = f"{fam}/{level}"
-            if len(done.get(key, {})) >= episodes:
-                continue
-            done[key] = episodes_won(lambda: make_agent("copi-learnt", caps), fam, level,
-                                     episodes)  # fmt: skip
-            cache.write_text(json.dumps(done))
-    succ = {tuple(key.split("/")): {int(k): v for k, v in w.items()} for key, w in done.items()}
+        took = time.perf_counter() - t0
+        kept_times(bench / "rl-timing.json", {f"{name}-learn": (took, round(took))})
+    config = BenchmarkConfig(
+        methods=tuple(parse_methods(",".join(f"copi-learnt@{lv}" for lv in levels))),
+        families=FAMILIES, episodes=episodes, capabilities={"learnt": str(path)},
+    )  # fmt: skip
+    store = bench / f"variant-{name}.sqlite"
+    run_benchmark(config, store, workers=workers)
+    succ = {(fam, level): w for (fam, _, level), w in won(store).items()}
     rate = {key: float(np.mean(list(w.values()))) for key, w in succ.items()}
     return succ, rate, path
 
@@ -134,70 +134,73 @@ SEEDS = Path(__file__).resolve().parents[1] / "src" / "copi" / "data" / "rl" / "
 the spread over seeds is measured without training (seed 0's are the benchmark's)."""
 
 
+def _seed_policies() -> dict[str, tuple[str, int]]:
+    """Each shipped training seed's policy registered as a method of its own
+    (``ppo-F-sS``: its weights read from the file, as :class:`PPOAgent` reads any, and
+    their content part of every run's identity): {method: (configuration, seed)}."""
+    out = {}
+    for path in sorted(SEEDS.glob("ppo-*-s*.npz")):
+        config, seed = path.stem.removeprefix("ppo-").rsplit("-s", 1)
+
+        def make(*, weights: str = str(path)) -> PPOAgent:  # no guard: played as trained
+            return PPOAgent(weights=weights)
+
+        register_method(path.stem, make, summary=f"PPO ({config}), training seed {seed}",
+                        inputs=lambda p=path: {"weights_sha": file_sha(p)},
+                        replace=True)  # fmt: skip
+        out[path.stem] = (config, int(seed))
+    return out
+
+
 def seed_spread(bench: Path, episodes: int, games: int) -> dict[tuple[str, int, str], dict]:
     """Success per episode at level map of every shipped training seed's policy on the
     benchmark's episodes (in-family ones on their family, the mix's on each family) and
     survival per game of the chauffeur's: ``{(config, seed, family or "game"): {k: won}}``
-    (seed 0's in-family and mix rows are in the store), cached in ``bench``."""
-    from copi.baselines import PPOAgent
-    from copi.experiments.pursuit import PursuitConfig
-
-    cache = bench / "rl-seeds.json"
-    for path in sorted(SEEDS.glob("ppo-*-s*.npz")):
-        config, seed = path.stem.removeprefix("ppo-").rsplit("-s", 1)
+    (seed 0's in-family and mix rows are in the benchmark's store); in
+    ``bench/seeds.sqlite`` and ``bench/chauffeur.sqlite``, in this process (the seeds'
+    methods are registered here only)."""
+    policies = _seed_policies()
+    store = bench / "seeds.sqlite"
+    spread: dict[tuple[str, int, str], dict] = {}
+    for fam in FAMILIES:
+        names = [m for m, (c, _) in policies.items() if c in (fam, "mix")]
+        if names:
+            config = BenchmarkConfig(methods=tuple(parse_methods(",".join(f"{m}@map"
+                                                                          for m in names))),
+                                     families=(fam,), episodes=episodes)  # fmt: skip
+            run_benchmark(config, store)
+    if store.is_file():
+        for (fam, method, _), w in won(store).items():
+            config, seed = policies[method]
+            spread[config, seed, fam] = w
+    for method, (config, seed) in policies.items():
         if config == "chauffeur":
-            cfg = PursuitConfig(capabilities=None, evader="ppo-chauffeur", games=games, seed=0)
-            play(cache, f"{config}/{seed}/game", cfg, games, PPOAgent(weights=str(path)))
-            continue
-        done = json.loads(cache.read_text()) if cache.is_file() else {}
-        for fam in FAMILIES if config == "mix" else (config,) if config in FAMILIES else ():
-            key = f"{config}/{seed}" if config in FAMILIES else f"{config}/{seed}/{fam}"
-            if len(done.get(key, {})) < episodes:
-                done[key] = episodes_won(lambda p=path: PPOAgent(weights=str(p)), fam, "map",
-                                         episodes)  # fmt: skip
-                cache.write_text(json.dumps(done))
-    done = json.loads(cache.read_text()) if cache.is_file() else {}
-    spread = {}
-    for key, w in done.items():
-        parts = key.split("/")
-        fam = parts[0] if len(parts) == 2 else parts[2]
-        spread[parts[0], int(parts[1]), fam] = {int(k): v for k, v in w.items()}
+            spread[config, seed, "game"] = play(bench / "chauffeur.sqlite", PursuitConfig(
+                capabilities=None, evader=method, games=games, seed=0))  # fmt: skip
     return spread
 
 
-def play(cache: Path, key: str, config: Any, games: int, agent: Any = None) -> dict[int, bool]:
-    """Survival per game of ``config``'s evader (or of ``agent``), cached under ``key``."""
-    from copi.experiments.pursuit import run_game
-
-    done: dict[str, dict[str, bool]] = json.loads(cache.read_text()) if cache.is_file() else {}
-    have = done.get(key, {})
-    if len(have) < games:
-        t0 = time.perf_counter()
-        for k in range(games):
-            if str(k) not in have:
-                have[str(k)] = run_game(config, k, agent).outcome == "escaped"
-        done[key] = have
-        cache.write_text(json.dumps(done))
-        print(f"chauffeur, {key}: {np.mean(list(have.values())):.3f} survival "
-              f"({time.perf_counter() - t0:.0f} s)", flush=True)  # fmt: skip
-    return {int(k): v for k, v in have.items() if int(k) < games}
+def play(store: Path, config: PursuitConfig) -> dict[int, bool]:
+    """Survival per game of ``config``'s evader, played into ``store``."""
+    t0 = time.perf_counter()
+    run = pursue(config, store)
+    with ResultsStore(store, readonly=True) as s:
+        rows = s.games(run)
+    print(f"chauffeur, {config.method}: {np.mean([r.outcome == 'escaped' for r in rows]):.3f} "
+          f"survival ({time.perf_counter() - t0:.0f} s)", flush=True)  # fmt: skip
+    return {int(r.game): r.outcome == "escaped" for r in rows if r.game < config.games}
 
 
-def play_games(caps: Path, games: int, cache: Path) -> dict[str, dict[int, bool]]:
-    """Survival per game of each evader (cached in ``cache``, a JSON file)."""
-    from copi.experiments.pursuit import PursuitConfig
-
-    return {e: play(cache, e, PursuitConfig(capabilities=str(caps) if e != "game" else None,
-                                            evader=e, games=games, seed=0), games)
+def play_games(bench: Path, caps: Path, games: int) -> dict[str, dict[int, bool]]:
+    """Survival per game of each evader of :data:`EVADERS`."""
+    return {e: play(bench / "chauffeur.sqlite",
+                    PursuitConfig(capabilities=str(caps) if e != "game" else None, evader=e,
+                                  games=games, seed=0))
             for e in EVADERS}  # fmt: skip
 
 
 def copi_validation(caps_path: Path, policies: dict[str, dict]) -> dict[str, float]:
     """copi-learnt's success on each PPO configuration's validation episodes."""
-    from copi.learning import Capabilities
-    from copi.methods import make_agent
-    from copi.rl._train import TrainConfig, validation_success
-
     caps = Capabilities.load(caps_path)
     out = {}
     for name, info in policies.items():
@@ -211,8 +214,6 @@ def copi_validation(caps_path: Path, policies: dict[str, dict]) -> dict[str, flo
 
 
 def copi_cost(caps_path: Path) -> tuple[int, str]:
-    from copi.learning import Capabilities, simulated_steps
-
     c = simulated_steps(Capabilities.load(caps_path).params)
     return c["total"], (
         f"{c['exploration']:,} exploration steps, {c['walks']:,} steps of probing walks and at "
@@ -259,14 +260,10 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--out", default="docs/rl.md")
     a = ap.parse_args()
-    from copi.baselines._ppo import packaged_policy
-    from copi.experiments.pursuit import PursuitConfig
-    from copi.reports import read_benchmark
-    from copi.results import summarize_rows
-
     bench = Path(a.bench)
+    bench.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
-    run_benchmark(bench, a.episodes, a.workers)
+    benchmark(bench, a.episodes, a.workers)
     t_bench = time.perf_counter() - t0
     groups, _, _ = read_benchmark(bench / "benchmark.sqlite")
     caps = bench / "capabilities-learnt.npz"
@@ -281,18 +278,21 @@ def main() -> None:
         path = packaged_policy(f"ppo-{name}").with_suffix(".json")
         if path.is_file():
             policies[f"ppo-{name}"] = json.loads(path.read_text())
-    star_succ, star_rate, _ = variant(bench, "star-only", STAR_ONLY, a.episodes)
-    lean_succ, lean_rate, lean_caps = variant(bench, "lean", LEAN, a.episodes, ("map",))
+    star_succ, star_rate, _ = variant(bench, "star-only", STAR_ONLY, a.episodes, a.workers)
+    lean_succ, lean_rate, lean_caps = variant(bench, "lean", LEAN, a.episodes, a.workers,
+                                              ("map",))
     # wall times of the runs that did the work (a rerun that only resumes keeps them)
     t1 = time.perf_counter()
-    games = play_games(caps, a.games, bench / "chauffeur-games.json")
-    lean_games = play(bench / "chauffeur-games.json", "learnt-lean",
-                      PursuitConfig(capabilities=str(lean_caps), evader="learnt",
-                                    games=a.games, seed=0), a.games)  # fmt: skip
+    games = play_games(bench, caps, a.games)
+    # copi learnt at 1/100 plays as the same evader: its own store
+    lean_games = play(bench / "chauffeur-lean.sqlite",
+                      PursuitConfig(capabilities=str(lean_caps), evader="learnt", games=a.games,
+                                    seed=0))  # fmt: skip
     t_games = time.perf_counter() - t1
     seeds = seed_spread(bench, a.episodes, a.games)
     timing = kept_times(bench / "rl-timing.json",
                         {"bench": (t_bench, round(t_bench)), "games": (t_games, round(t_games))})
+    took_lean = timing.get("lean-learn", math.nan)
     t_bench, t_games = timing["bench"], timing["games"]
     copi_val = copi_validation(caps, policies)
     samples, how = copi_cost(caps)
@@ -300,13 +300,13 @@ def main() -> None:
     lines = [
         "# copi against deep RL",
         "",
-        "<!-- generated: written whole by benchmarks/rl_experiments.py -->",
+        "<!-- generated: written whole by studies/rl_experiments.py -->",
         "",
-        f"`python benchmarks/rl_experiments.py --bench {a.bench} --episodes {a.episodes} "
+        f"`python studies/rl_experiments.py --bench {a.bench} --episodes {a.episodes} "
         f"--games {a.games}` ({t_bench / 60:.0f} min of benchmark, {t_games / 60:.0f} "
         "min of games, on 2 cores). Benchmark seed 0, episodes 0 .. "
         f"{a.episodes - 1} of each family; PPO trained on training seeds, its settings "
-        "chosen on validation seed 1 (`benchmarks/rl_train_all.py --tune`). Δ: paired "
+        "chosen on validation seed 1 (`studies/rl_train_all.py --tune`). Δ: paired "
         "differences in points with 95 % bootstrap intervals; the winner is named only "
         "where the interval excludes 0.",
         "",
@@ -409,7 +409,8 @@ def main() -> None:
         lines.append(
             f"| {names[e]} | {_pct(float(np.mean(list(games[e].values()))))} | {d} | {better} |"
         )
-    lines += lean_rows(bench, LEAN, lean_succ, lean_rate, lean_games, succ, rate, games, policies)
+    lines += lean_rows(took_lean, LEAN, lean_succ, lean_rate, lean_games, succ, rate, games,
+                       policies)  # fmt: skip
     lines += [
         "",
         "## What each learner cost",
@@ -465,7 +466,7 @@ def main() -> None:
         page = out.parent / "benchmark-bounds.md"
         print(f"wrote {write_bounds_page(bench, a, page, n_oracle)}")
     else:  # a store of this script's methods alone: the bounds page is ceilings.py's
-        print(f"{bench} holds no bounds (benchmarks/ceilings.py): benchmark-bounds.md kept")
+        print(f"{bench} holds no bounds (studies/ceilings.py): benchmark-bounds.md kept")
 
 
 def seed_rows(succ: dict, seeds: dict[tuple[str, int, str], dict[int, bool]],
@@ -503,15 +504,11 @@ def seed_rows(succ: dict, seeds: dict[tuple[str, int, str], dict[int, bool]],
     return rows
 
 
-def lean_rows(bench: Path, params: dict, lean_succ: dict, lean_rate: dict,
+def lean_rows(took: float, params: dict, lean_succ: dict, lean_rate: dict,
               lean_games: dict[int, bool], succ: dict, rate: dict, games: dict,
               policies: dict) -> list[str]:  # fmt: skip
     """The section on copi learnt at a hundredth of PPO's samples (see :data:`LEAN`)."""
-    from copi.learning import LearnParams, simulated_steps
-
     cost = simulated_steps(LearnParams(**params))["total"]
-    took = json.loads((bench / "lean-learn.json").read_text())["seconds"] \
-        if (bench / "lean-learn.json").is_file() else math.nan  # fmt: skip
     ppo = min(info["steps"] for info in policies.values())
     shown = ", ".join(f"{k}={v!r}" for k, v in params.items())
     lines = [
@@ -577,8 +574,8 @@ def write_bounds_page(bench: Path, a: argparse.Namespace, page: Path, n_oracle: 
     from benchmark_page import write_page
 
     command = (
-        f"`python benchmarks/ceilings.py --bench {a.bench} --episodes {a.episodes} "
-        f"--oracle-episodes {n_oracle}` and `python benchmarks/rl_experiments.py --bench "
+        f"`python studies/ceilings.py --bench {a.bench} --episodes {a.episodes} "
+        f"--oracle-episodes {n_oracle}` and `python studies/rl_experiments.py --bench "
         f"{a.bench} --episodes {a.episodes} --games {a.games}` (seed 0; model-oracle on the "
         f"first {n_oracle} episodes)"
     )

@@ -1,6 +1,6 @@
 """Train every PPO policy copi reports, two at a time (one per core), resumably.
 
-    python benchmarks/rl_train_all.py --steps 2000000 --seeds 0 --out results/rl --install
+    python studies/rl_train_all.py --steps 2000000 --seeds 0 --out results/rl --install
 
 Configurations: ``mix`` (all five families), one per family (in-family), and
 ``chauffeur`` (the game's evader), each over the seeds given, with the settings chosen on
@@ -94,7 +94,7 @@ def main() -> None:
 def _install(out: Path) -> None:
     """Ship the seed-0 policies, their commands told as run from the repository with
     ``--out results/rl`` (the directory of this machine's run is nobody else's)."""
-    from copi.baselines._ppo import load_policy, save_policy
+    from copi.baselines import load_policy, save_policy
 
     SHIPPED.mkdir(parents=True, exist_ok=True)
     prefix = str(out).rstrip("/") + "/"

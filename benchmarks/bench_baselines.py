@@ -9,25 +9,23 @@ method costs next to copi.
 
 from __future__ import annotations
 
-import copy
 import tempfile
 from pathlib import Path
 
 import numpy as np
 
 from benchmarks._timing import Timing, fmt, show
-from copi.experiments.benchmark import benchmark_max_steps, ensure_capabilities
+from copi.experiments import ensure_capabilities
 from copi.learning import Capabilities
 from copi.methods import make_agent, method_names, method_spec
-from copi.runs import draw_episode, optimal_to_goal, run_episode
+from copi.runs import Episode
 
 
 def main() -> bool:
     caps_paths = ensure_capabilities(Path(tempfile.mkdtemp()), {"faithful", "extended",
                                                                  "learnt"})  # fmt: skip
     caps = {k: Capabilities.load(v) for k, v in caps_paths.items()}
-    episodes = [draw_episode("polygon", k, 3) for k in range(20)]
-    limits = [benchmark_max_steps(optimal_to_goal(sim)) for sim in episodes]
+    episodes = [Episode.draw("polygon", k, 3) for k in range(20)]
     rows = []
     for name in method_names():
         spec = method_spec(name)
@@ -35,10 +33,9 @@ def main() -> bool:
             continue
         level = spec.levels[-1]
         costs = []
-        for sim, limit in zip(episodes, limits, strict=True):
+        for episode in episodes:
             agent = make_agent(name, caps.get(spec.capabilities or ""))
-            costs.append(run_episode(agent, copy.deepcopy(sim), sensing=level,
-                                   max_steps=limit).decision_us)  # fmt: skip
+            costs.append(episode.run(agent, sensing=level).decision_us)
         rows.append(Timing(f"{name} ({level})", float(np.median(costs)) * 1e-6))
     ref = next(r for r in rows if r.name == "copi-extended (map)")
     show("decision cost per method (polygon, 20 episodes)",

@@ -19,12 +19,12 @@ from collections.abc import Callable
 from typing import Any
 
 from benchmarks._timing import note
-from copi.experiments.benchmark import benchmark_max_steps
 from copi.experiments.lifelong import draw_life
 from copi.learning import LearnParams, learn
 from copi.methods import make_agent
 from copi.online import CausalMap, CausalStrategy, Mapping
 from copi.runs import optimal_to_goal, run_episode
+from copi.runs import step_limit as benchmark_max_steps
 
 GOAL_US = 20.0
 

@@ -13,7 +13,6 @@ the script exits with status 1 when one is not. docs/tuning.md keeps the last ta
 from __future__ import annotations
 
 import argparse
-import copy
 import math
 import sys
 from concurrent.futures import ProcessPoolExecutor
@@ -21,10 +20,10 @@ from pathlib import Path
 
 import numpy as np
 
-from copi.experiments.benchmark import benchmark_max_steps, ensure_capabilities
+from copi.experiments import ensure_capabilities
 from copi.learning import Capabilities
 from copi.methods import make_agent, method_spec
-from copi.runs import draw_episode, optimal_to_goal, run_episode
+from copi.runs import Episode
 
 GRID: dict[str, list[dict[str, float]]] = {
     "copi-extended": [{"guard": g} for g in (0.9, 1.05, 1.2, 1.4)],
@@ -63,9 +62,8 @@ CAPS: dict[str, str] = {}
 
 def _episode(args: tuple[str, int]) -> list[tuple[str, int, str, float]]:
     family, k = args
-    base = draw_episode(family, k, SEED)
-    optimal = optimal_to_goal(base)
-    steps = benchmark_max_steps(optimal)
+    episode = Episode.draw(family, k, SEED)
+    optimal = episode.optimal
     out = []
     for method, settings in GRID.items():
         spec = method_spec(method)
@@ -74,8 +72,7 @@ def _episode(args: tuple[str, int]) -> list[tuple[str, int, str, float]]:
         level = "oracle" if spec.sensing == "oracle" else "map"
         caps = Capabilities.load(CAPS[spec.capabilities]) if spec.capabilities else None
         for i, p in enumerate(settings):
-            res = run_episode(make_agent(method, caps, **p), copy.deepcopy(base), sensing=level,
-                            max_steps=steps)  # fmt: skip
+            res = episode.run(make_agent(method, caps, **p), sensing=level)
             ex = res.path_length / optimal - 1 if res.outcome == "success" else math.nan
             out.append((method, i, res.outcome, ex))
     return out

@@ -4,14 +4,18 @@ that registers what its package adds when called."""
 
 from __future__ import annotations
 
+import functools
+import hashlib
 import importlib.metadata
+import inspect
 import re
+import sys
 import threading
-from typing import Generic, TypeVar
+from typing import Any, Generic, TypeVar
 
 from copi.errors import CopiError, InvalidArgumentError
 
-__all__ = ["Registry", "load_entry_points"]
+__all__ = ["Registry", "load_entry_points", "origin_of"]
 
 _LOADED: set[tuple[str, str, str]] = set()
 _LOCK = threading.RLock()
@@ -46,6 +50,48 @@ def load_entry_points(group: str) -> int:
     return called
 
 
+@functools.lru_cache(maxsize=1)
+def _distributions() -> dict[str, list[str]]:
+    return dict(importlib.metadata.packages_distributions())
+
+
+def origin_of(thing: Any, kind: str) -> dict[str, str]:
+    """Where a registered method's factory or a family's sampler comes from, for the
+    identity of every run of it (``kind``: "method" or "family" names the keys): nothing
+    for copi's own (copi's version is in every identity already); otherwise its package
+    and version (``KIND_origin``) and a hash of the source of the module that defines it
+    (``KIND_code``), so that a run of another package's thing of the same name, or of its
+    code changed since, never resumes into the stored one.
+
+    Examples
+    --------
+    >>> from copi.baselines import DWA
+    >>> origin_of(DWA, "method")
+    {}
+    """
+    module_name = getattr(thing, "__module__", None) or type(thing).__module__
+    if module_name == "copi" or module_name.startswith("copi."):
+        return {}
+    top = module_name.split(".")[0]
+    dists = _distributions().get(top, [])
+    package = module_name
+    if dists:
+        try:
+            package = f"{dists[0]} {importlib.metadata.version(dists[0])}"
+        except importlib.metadata.PackageNotFoundError:  # pragma: no cover - half-installed
+            package = dists[0]
+    module = sys.modules.get(module_name)
+    try:
+        source = inspect.getsource(module) if module is not None else inspect.getsource(thing)
+    except (OSError, TypeError):  # defined where no source is kept (an interpreter session)
+        try:
+            source = inspect.getsource(thing)
+        except (OSError, TypeError):
+            source = repr(getattr(thing, "__qualname__", thing))
+    code = hashlib.sha256(source.encode()).hexdigest()[:16]
+    return {f"{kind}_origin": package, f"{kind}_code": code}
+
+
 _NAME = re.compile(r"^[a-z0-9][a-z0-9_.-]*$")
 """A registered name: lower-case letters, digits, ``-``, ``_``, ``.`` (``@``, ``:``, ``+``
 and ``/`` belong to the command line's grammar, never to a name)."""
@@ -64,6 +110,8 @@ class Registry(Generic[T]):
         self.group = group
         self._items: dict[str, T] = {}
         self._own: frozenset[str] = frozenset()
+        self._originals: dict[str, T] = {}
+        self._replaced: set[str] = set()
 
     def add(self, name: str, item: T, *, same: bool, replace: bool = False) -> T:
         """Register ``item`` as ``name``; a name taken is refused unless ``replace`` or
@@ -82,8 +130,17 @@ class Registry(Generic[T]):
                     f"a {self.kind} named {name!r} is registered already; pass replace=True "
                     "to register over it"
                 )
+            if name in self._own:  # over one of copi's own, or putting it back
+                if item is self._originals.get(name):
+                    self._replaced.discard(name)
+                else:
+                    self._replaced.add(name)
             self._items[name] = item
         return item
+
+    def replaced(self, name: str) -> bool:
+        """Whether ``name``, one of copi's own, is registered over by another package."""
+        return name in self._replaced and name in self._items
 
     def current(self, name: str) -> T | None:
         """What ``name`` is registered as now (entry points not consulted)."""
@@ -92,13 +149,23 @@ class Registry(Generic[T]):
     def seal(self) -> None:
         """What is registered now is copi's own: it cannot be removed."""
         self._own = frozenset(self._items)
+        self._originals = dict(self._items)
+
+    def original(self, name: str) -> T | None:
+        """copi's own registration of ``name`` (to put it back), else None."""
+        return self._originals.get(name)
 
     def remove(self, name: str) -> None:
-        """Forget a registered name (e.g. one a test registered); copi's own stay."""
-        if name in self._own:
-            raise InvalidArgumentError(f"{name} is one of copi's own {self.plural}; it stays "
-                                       "registered")  # fmt: skip
+        """Forget a registered name (e.g. one a test registered); copi's own stay (one
+        registered over puts copi's back)."""
         with _LOCK:
+            if name in self._replaced:
+                self._items[name] = self._originals[name]
+                self._replaced.discard(name)
+                return
+            if name in self._own:
+                raise InvalidArgumentError(f"{name} is one of copi's own {self.plural}; it "
+                                           "stays registered")  # fmt: skip
             self._items.pop(name, None)
 
     def get(self, name: str) -> T | None:

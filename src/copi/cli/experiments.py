@@ -450,20 +450,33 @@ def list_command() -> None:
     """The registered methods (what each needs and is), world families and presets,
     copi's and those other packages add through their entry points."""
     from rich.table import Table
+    from rich.text import Text
 
-    from copi.methods import PRESETS, method_names, method_spec
-    from copi.world import family_names, family_spec
+    from copi.methods import PRESETS, method_names, method_replaced, method_spec
+    from copi.world import family_names, family_replaced, family_spec
+
+    def about(summary: str, origin: dict[str, str], replaced: bool) -> Text:
+        """What it is, and for another package's, where it comes from (user text is never
+        read as markup)."""
+        text = Text(summary)
+        if origin:
+            from_ = next(v for k, v in origin.items() if k.endswith("_origin"))
+            text.append(f" [from {from_}" + ("; registered over copi's own]" if replaced
+                                            else "]"), style="italic")  # fmt: skip
+        return text
 
     table = Table("method", "needs", "levels", "extra", "what it is", title="methods")
     for name in method_names():
         spec = method_spec(name)
         extra = "" if spec.requires is None else (
             spec.requires + ("" if spec.available() else " (not installed)"))  # fmt: skip
-        table.add_row(name, spec.sensing, ", ".join(spec.levels), extra, spec.summary)
+        table.add_row(Text(name), spec.sensing, ", ".join(spec.levels), extra,
+                      about(spec.summary, spec.origin, method_replaced(name)))  # fmt: skip
     out.print(table)
     fams = Table("family", "what it is", title="world families")
     for name in family_names():
-        fams.add_row(name, family_spec(name).summary)
+        fam = family_spec(name)
+        fams.add_row(Text(name), about(fam.summary, fam.origin, family_replaced(name)))
     out.print(fams)
     presets = Table("preset", "method", "what it is", title="presets (copi learn --preset)")
     for name, p in PRESETS.items():

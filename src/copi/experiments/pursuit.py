@@ -114,10 +114,13 @@ class PursuitConfig:
 
     def identity(self) -> dict[str, Any]:
         """What makes two runs the same run: the configuration without the capabilities'
-        path, with its content and copi's version."""
+        path, with its content and copi's version, and for an evader that is a registered
+        method, the files it reads and where it comes from."""
         d = dataclasses.asdict(self)
         del d["capabilities"]
         d["code"] = code_version()
+        if self.evader not in EVADERS:  # a registered method: its weights, where it is from
+            d.update(method_spec(self.evader).input_hashes())
         return d
 
     @property

@@ -16,7 +16,7 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
-from copi._plugins import Registry
+from copi._plugins import Registry, origin_of
 from copi.core import Agent, Sensing, check_sensing
 from copi.errors import InvalidArgumentError
 from copi.learning import Capabilities
@@ -29,6 +29,7 @@ __all__ = [
     "default_methods",
     "make_agent",
     "method_names",
+    "method_replaced",
     "method_spec",
     "methods_markdown",
     "register_method",
@@ -78,10 +79,15 @@ class MethodSpec:
     inputs: Callable[[], dict[str, str]] | None = field(default=None, compare=False, repr=False)
     """Content hashes of the files the method reads (e.g. trained weights), by name: part
     of every run's identity, so that results of other weights never resume into it."""
+    origin: dict[str, str] = field(default_factory=dict, compare=False)
+    """Where the method comes from, for another package's: its package and version and a
+    hash of its module's code (:func:`copi._plugins.origin_of`); empty for copi's own."""
 
     def input_hashes(self) -> dict[str, str]:
-        """:attr:`inputs`, called (empty for a method that reads no file)."""
-        return {} if self.inputs is None else dict(self.inputs())
+        """What the method's results depend on beyond its parameters, for every run's
+        identity: where it comes from (:attr:`origin`) and the files it reads
+        (:attr:`inputs`, called). Empty for copi's own methods that read no file."""
+        return {**self.origin, **({} if self.inputs is None else dict(self.inputs()))}
 
     def make(self, capabilities: Capabilities | None = None, **params: Any) -> Agent:
         """A fresh agent with the registered parameters, updated by ``params``."""
@@ -211,7 +217,7 @@ def register_method(
         name=name, factory=factory, sensing=sensing, levels=chosen, summary=summary,
         params=merged, capabilities=capabilities, requires=requires,
         available=available or (lambda: True), ablation=ablation, default=default,
-        bound=bound, inputs=inputs,
+        bound=bound, inputs=inputs, origin=origin_of(factory, "method"),
         missing=missing or (f"the optional extra {requires!r}, which is not installed: pip "
                             f"install 'copi[{requires}]'" if requires else ""),
     )  # fmt: skip
@@ -221,8 +227,15 @@ def register_method(
 
 
 def unregister_method(name: str) -> None:
-    """Remove a registered method (e.g. one a test registered); copi's own stay."""
+    """Remove a registered method (e.g. one a test registered); copi's own stay, and one
+    registered over copi's own puts copi's back."""
     REGISTRY.remove(name)
+
+
+def method_replaced(name: str) -> bool:
+    """Whether ``name``, one of copi's own methods, is registered over by another
+    package (``register_method(..., replace=True)``)."""
+    return REGISTRY.replaced(name)
 
 
 def method_names() -> tuple[str, ...]:

@@ -534,6 +534,17 @@ def _difference(
 ) -> str:
     """One line saying how a run's configuration differs from the one already stored."""
     diff = sorted(k for k in set(other) | set(config) if other.get(k) != config.get(k))
+    for kind in ("method", "family"):
+        if f"{kind}_origin" in diff or f"{kind}_code" in diff:
+            name = method if kind == "method" else config.get("family", "?")
+            there = other.get(f"{kind}_origin") or "copi's own"
+            now = config.get(f"{kind}_origin") or "copi's own"
+            how = f"from {there} there, from {now} now" if there != now else (
+                f"from {now}, whose code changed since")  # fmt: skip
+            return (
+                f"{path} holds a {experiment} run of {kind} {name!r} {how}: write to another "
+                "output file (a run of one never resumes into the other's)"
+            )
     changed = [_INPUTS[k] for k in diff if k in _INPUTS and other.get(k) and config.get(k)]
     if changed and len(changed) == len(diff):
         return (

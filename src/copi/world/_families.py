@@ -11,7 +11,7 @@ import numpy as np
 import shapely
 from shapely.geometry import LineString
 
-from copi._plugins import Registry
+from copi._plugins import Registry, origin_of
 from copi._rng import Seed, as_generator
 from copi._validation import as_vector
 from copi.errors import InvalidArgumentError
@@ -29,6 +29,7 @@ __all__ = [
     "check_family",
     "family_inputs",
     "family_names",
+    "family_replaced",
     "family_spec",
     "in_sight",
     "register_family",
@@ -62,6 +63,10 @@ class FamilySpec:
     """The content hashes of the data the family draws from, by name (None: the seed
     only): part of every run's identity, so that worlds drawn from other data never
     resume into a run."""
+    origin: dict[str, str] = field(default_factory=dict, compare=False)
+    """Where the sampler comes from, for another package's family: its package and
+    version and a hash of its module's code (:func:`copi._plugins.origin_of`); empty for
+    copi's own."""
 
 
 _FAMILIES: Registry[FamilySpec] = Registry("family", ENTRY_POINTS, "families")
@@ -94,13 +99,20 @@ def register_family(
         raise InvalidArgumentError(f"the sampler of {name} must be callable; got {sampler!r}")
     old = _FAMILIES.current(name)
     same = old is not None and old.sampler is sampler
-    return _FAMILIES.add(name, FamilySpec(name, sampler, summary, inputs), same=same,
-                         replace=replace)  # fmt: skip
+    spec = FamilySpec(name, sampler, summary, inputs, origin_of(sampler, "family"))
+    return _FAMILIES.add(name, spec, same=same, replace=replace)
 
 
 def unregister_family(name: str) -> None:
-    """Remove a registered family (e.g. one a test registered); copi's own stay."""
+    """Remove a registered family (e.g. one a test registered); copi's own stay, and one
+    registered over copi's own puts copi's back."""
     _FAMILIES.remove(name)
+
+
+def family_replaced(name: str) -> bool:
+    """Whether ``name``, one of copi's own families, is registered over by another
+    package (``register_family(..., replace=True)``)."""
+    return _FAMILIES.replaced(name)
 
 
 def family_names() -> tuple[str, ...]:
@@ -128,7 +140,8 @@ def family_inputs(family: str) -> dict[str, str]:
     """The content hashes of the data a family draws its worlds from, by name: part of
     the identity of every run of the family, so that worlds drawn from other data never
     resume into it. ``maps``: ``{"maps_sha": maps_identity()}`` (the map set of
-    :func:`movingai_dir`); the generated families draw from nothing but the seed.
+    :func:`movingai_dir`); the generated families draw from nothing but the seed. Another
+    package's family adds where it comes from (:attr:`FamilySpec.origin`).
 
     Examples
     --------
@@ -136,7 +149,7 @@ def family_inputs(family: str) -> dict[str, str]:
     ({}, ['maps_sha'])
     """
     spec = family_spec(family)
-    return {} if spec.inputs is None else dict(spec.inputs())
+    return {**spec.origin, **({} if spec.inputs is None else dict(spec.inputs()))}
 
 
 def sample_world(

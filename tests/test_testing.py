@@ -68,6 +68,19 @@ class _NaN(_East):
         return np.array([np.nan, 0.0]) if super().act(obs) is not None and self.t > 3 else [0, 0]
 
 
+class _Complex(_East):
+    def act(self, obs: Any) -> Any:
+        return np.array([0.5 + 0.5j, 0.0])
+
+
+class _LateNaN(_East):
+    """Goes east well until step 100, then returns NaN (the long hall reaches it)."""
+
+    def act(self, obs: Any) -> Any:
+        super().act(obs)
+        return np.array([np.nan, 0.0]) if self.t >= 100 else np.array([1.0, 0.0])
+
+
 class _Peeks(_East):
     """Declares ``sensor`` but reads the map's position."""
 
@@ -113,6 +126,7 @@ class _BadLevel(_East):
         (_Shape, "agent 'east' at level sensor: act returned shape (3,), expected (2,), at step 1"),
         (_NaN, "act returned [nan, 0.0] at step 4 of episode 0: not finite"),
         (_Peeks, "act raised TypeError"),
+        (_Complex, "act returned complex128 numbers at step 1 of episode 0, expected real ones"),
         (_Random, "two runs of episode 0 differ at step 1"),
         (_Scribbles, "act changed the observation's ranges in place at step 1"),
         (_Counters, "counters returned values that are not numbers"),
@@ -126,6 +140,22 @@ def test_a_broken_agent_is_refused_in_one_line(agent: Any, message: str) -> None
         check_agent(agent, episodes=2, max_steps=30)
     text = str(err.value)
     assert message in text and "\n" not in text, text
+
+
+def test_a_velocity_gone_wrong_late_is_found_with_the_default_limit() -> None:
+    with pytest.raises(AgentCheckError, match=r"act returned \[nan, 0.0\] at step 100 of "
+                       "episode 0: not finite"):  # fmt: skip
+        check_agent(_LateNaN)
+
+
+@pytest.mark.parametrize(("kw", "message"), [
+    ({"episodes": 0}, "episodes must be an int in 1 .. 10,000; got 0"),
+    ({"max_steps": -5}, "max_steps must be an int in 1 .. 10,000; got -5"),
+    ({"max_steps": 2.5}, "max_steps must be an int in 1 .. 10,000; got 2.5"),
+])  # fmt: skip
+def test_counts_of_the_check_itself_are_checked(kw: dict[str, Any], message: str) -> None:
+    with pytest.raises(AgentCheckError, match=message):
+        check_agent(_East, **kw)
 
 
 def test_an_instance_is_checked_through_its_reset() -> None:

@@ -15,6 +15,7 @@ __all__ = [
     "InvalidQueryError",
     "InvalidWorldError",
     "MapFileError",
+    "MethodError",
     "NotFittedError",
     "ResultsError",
     "WorldFileError",
@@ -63,6 +64,12 @@ class CapabilitiesFormatError(CopiError, ValueError):
 
 class NotFittedError(CopiError, ValueError):
     """An estimator or controller was used before it was fitted or configured."""
+
+
+class MethodError(CopiError):
+    """A method broke the :class:`~copi.core.Agent` contract during an episode: it raised,
+    or returned something that is not a velocity. The message names the method, the step,
+    and what it did; the run stops there (what was stored stays)."""
 
 
 class ResultsError(CopiError):

@@ -41,8 +41,9 @@ class AgentCheckError(CopiError):
 
 
 def _episodes(seed: int, n: int) -> list[Any]:
-    """n short episodes the check runs: an empty room, a room with a pillar and moving
-    discs, and worlds of the paper's family (seeded)."""
+    """n episodes the check runs: an empty room, a room with a pillar and moving discs, a
+    long hall (a goal 150 steps away, so that a run of the default limit reaches its
+    last step), and worlds of the paper's family (seeded)."""
     from copi.world import ObstacleSpec, Simulator, World, sample_world
 
     square = np.array([[0, 0], [20, 0], [20, 20], [0, 20]], dtype=np.float64)
@@ -50,10 +51,13 @@ def _episodes(seed: int, n: int) -> list[Any]:
     pillar = World(np.array([[0, 0], [24, 0], [24, 16], [0, 16]], dtype=np.float64),
                    (np.array([[10, 6], [14, 6], [14, 10], [10, 10]], dtype=np.float64),),
                    name="check-pillar")  # fmt: skip
+    hall = World(np.array([[0, 0], [160, 0], [160, 8], [0, 8]], dtype=np.float64),
+                 name="check-hall")  # fmt: skip
     sims = [
         Simulator(room, [3, 3], [16, 15], np.zeros((0, 2)), [], seed=seed),
         Simulator.from_world(pillar, np.random.default_rng([seed, 1]),
                              obstacles=ObstacleSpec(count=(4, 4))),
+        Simulator(hall, [4, 4], [155, 4], np.zeros((0, 2)), [], seed=seed),
     ]  # fmt: skip
     k = 0
     while len(sims) < n:
@@ -104,11 +108,14 @@ class _Probe(Agent):
             if (a is None) != (b is None) or (a is not None and not np.array_equal(a, b)):
                 raise self._fail(f"act changed the observation's {field} in place {where}")
         try:
-            action = np.asarray(raw, dtype=np.float64)
+            action = np.asarray(raw)
         except (TypeError, ValueError):
             raise self._fail(f"act returned {type(raw).__name__}, not a velocity {where}") from None
         if action.shape != (2,):
             raise self._fail(f"act returned shape {action.shape}, expected (2,), {where}")
+        if action.dtype.kind not in "iuf":
+            raise self._fail(f"act returned {action.dtype} numbers {where}, expected real ones")
+        action = action.astype(np.float64)
         if not np.isfinite(action).all():
             raise self._fail(f"act returned {action.tolist()} {where}: not finite")
         norm = math.hypot(action[0], action[1])
@@ -147,7 +154,7 @@ def check_agent(
     levels: Iterable[Sensing] | None = None,
     capabilities: Any = None,
     episodes: int = 3,
-    max_steps: int = 60,
+    max_steps: int = 120,
     seed: int = 0,
 ) -> None:
     """Check that ``agent`` keeps the :class:`~copi.core.Agent` contract; raise
@@ -155,7 +162,8 @@ def check_agent(
 
     ``agent``: an Agent class or factory (called for each run), an Agent instance (reset
     between runs), or a registered method's name (built with ``capabilities``). It is run
-    for ``episodes`` short episodes (an empty room, a room with a pillar and moving discs,
+    for ``episodes`` episodes of at most ``max_steps`` steps (an empty room, a room with a
+    pillar and moving discs, a long hall whose goal is farther than the default limit,
     the paper's worlds) at each of ``levels`` (default: every level it may run at, from
     its own), and must:
 
@@ -166,6 +174,9 @@ def check_agent(
     - accept ``finish`` and return counters as a dict of numbers by name;
     - act the same in two runs of the same episode (determinism from the seed).
     """
+    for value, name in ((episodes, "episodes"), (max_steps, "max_steps")):
+        if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= 10_000:
+            raise AgentCheckError(f"{name} must be an int in 1 .. 10,000; got {value!r}")
     if isinstance(agent, str):
         from copi.methods import make_agent
 

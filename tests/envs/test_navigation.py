@@ -1,5 +1,7 @@
 from __future__ import annotations
 
+import re
+
 import gymnasium
 import numpy as np
 import pytest
@@ -188,3 +190,34 @@ def test_record_video_writes_the_episode(tmp_path) -> None:
         env.step(env.action_space.sample())
     env.close()
     assert list(tmp_path.glob("*.mp4"))
+
+
+@pytest.mark.parametrize(("kw", "message"), [
+    ({"goal_tolerance": float("nan")}, "goal_tolerance must be a finite number >= 0; got nan"),
+    ({"max_steps": 0}, "max_steps must be a positive int; got 0"),
+    ({"n_rays": 100_000_000}, "n_rays must be at most 4,096"),
+    ({"agent_radius": -1.0}, "agent_radius must be a finite number > 0"),
+])  # fmt: skip
+def test_bad_settings_are_refused_in_one_line(kw: dict, message: str) -> None:
+    import gymnasium
+
+    with pytest.raises(InvalidArgumentError, match=re.escape(message)):
+        gymnasium.make("copi/Navigation-v0", **kw)
+
+
+def test_actions_of_other_kinds_and_steps_after_the_end_are_refused() -> None:
+    import gymnasium
+
+    env = gymnasium.make("copi/Navigation-v0", disable_env_checker=True, max_steps=3,
+                         obstacles=0)  # fmt: skip
+    env.reset(seed=0)
+    for action, what in ((np.array([True, False]), "bool"), (np.array([1 + 1j, 0]), "complex")):
+        with pytest.raises(InvalidArgumentError, match=f"2 real numbers .* got {what}"):
+            env.step(action)
+    for _ in range(3):
+        *_, terminated, truncated, _ = env.step(np.zeros(2, dtype=np.float32))
+    assert truncated and not terminated
+    with pytest.raises(gymnasium.error.ResetNeeded, match="the episode has ended"):
+        env.unwrapped.step(np.zeros(2, dtype=np.float32))
+    env.reset(seed=1)  # a new episode steps again
+    env.step(np.zeros(2, dtype=np.float32))

@@ -47,8 +47,10 @@ _option_type = TyperOption.display_type_rich
 TyperOption.display_type_rich = _flag_type  # type: ignore[method-assign]
 app.add_typer(world_app, name="world")
 
-console = Console(stderr=True, soft_wrap=True)
-out = Console(soft_wrap=True)
+# markup off: what copi prints holds file names, method descriptions and values ("[nan,
+# 0.0]") that rich would otherwise read as its markup and drop or refuse
+console = Console(stderr=True, soft_wrap=True, markup=False)
+out = Console(soft_wrap=True, markup=False)
 
 
 def _print_version(value: bool) -> None:

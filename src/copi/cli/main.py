@@ -16,6 +16,7 @@ import sys
 import threading
 
 import typer
+from rich.text import Text
 
 try:  # typer >= 0.20 carries its own copy of click
     from typer._click import exceptions as _click
@@ -32,7 +33,7 @@ for _group in ("world", "learning", "experiments", "watch", "rl"):
 
 def _error(message: str) -> None:
     line = " ".join(str(message).split())  # one line, whatever the message held
-    console.print(f"[red]copi: error:[/red] {line}", highlight=False, markup=True)
+    console.print(Text("copi: error:", style="red"), Text(line), highlight=False)
     sys.exit(2)
 
 

@@ -29,6 +29,7 @@ import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
 
+from copi._validation import check_count, positive_int
 from copi.baselines import direction_frame, features, observation_size, to_world
 from copi.core import Observation, check_sensing
 from copi.errors import InvalidArgumentError
@@ -105,7 +106,9 @@ class LocalPolicyEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         self.levels = tuple(levels) if task == "navigation" else ("map",)
         self.task = task
         self.reward = reward or Reward()
-        self.max_steps = int(max_steps)
+        positive_int(max_steps, "max_steps")
+        self.max_steps = check_count(int(max_steps), "max_steps", 1_000_000)
+        self._ended: str | None = "not started"
         self.seed_of_episodes = int(seed_of_episodes)
         n = 32
         self.observation_space = spaces.Box(-1.0, 1.0, shape=(observation_size(n),),
@@ -176,13 +179,22 @@ class LocalPolicyEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         self._prev = None
         self._draw()
         self.t = 0
+        self._ended = None
         return self._observe(), {}
 
     def step(
         self, action: NDArray[np.float32]
     ) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
-        a = np.asarray(action, dtype=np.float64).reshape(-1)
-        if a.shape != (2,) or not np.isfinite(a).all():
+        if self._ended is not None:
+            why = "call reset() first" if self._ended == "not started" else (
+                f"the episode has ended ({self._ended}); call reset()")  # fmt: skip
+            raise gymnasium.error.ResetNeeded(why)
+        a = np.asarray(action)
+        if a.shape != (2,) or a.dtype.kind not in "iuf":
+            raise InvalidArgumentError(f"action must be 2 real numbers of shape (2,); got "
+                                       f"{a.dtype} values of shape {a.shape}")  # fmt: skip
+        a = a.astype(np.float64)
+        if not np.isfinite(a).all():
             raise InvalidArgumentError(f"action must be 2 finite numbers; got {a.tolist()}")
         a = np.clip(a, -1.0, 1.0)
         norm = math.hypot(a[0], a[1])
@@ -206,6 +218,8 @@ class LocalPolicyEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
             info["is_success"] = False
             truncated = not terminated and self.t >= self.max_steps
             info["survived"] = truncated
+            if terminated or truncated:
+                self._ended = "terminated" if terminated else "truncated"
             return self._observe(), float(reward), terminated, truncated, info
         res = self.sim.step(a)
         moved = self.sim.position - before
@@ -217,4 +231,6 @@ class LocalPolicyEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
             reward -= w.contact
         info["is_success"] = bool(res.reached and not res.contact)
         truncated = not terminated and self.t >= self.max_steps
+        if terminated or truncated:
+            self._ended = "terminated" if terminated else "truncated"
         return self._observe(), float(reward), terminated, truncated, info

@@ -11,6 +11,7 @@ import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
 
+from copi._validation import check_count, non_negative, positive, positive_int
 from copi.core import Observation, Task
 from copi.errors import InvalidArgumentError
 from copi.world import (
@@ -133,8 +134,12 @@ class NavigationEnv(gymnasium.Env[ObsType, ObsType]):
                 f"render_mode must be one of {self.metadata['render_modes']} or None; "
                 f"got {render_mode!r}"
             )
-        if int(max_steps) != max_steps or max_steps < 1:
-            raise InvalidArgumentError(f"max_steps must be a positive int; got {max_steps!r}")
+        positive_int(max_steps, "max_steps")
+        check_count(int(max_steps), "max_steps", 1_000_000)
+        for name, value in (("agent_radius", agent_radius), ("goal_range", goal_range)):
+            positive(value, name)
+        for name, value in (("goal_tolerance", goal_tolerance), ("min_distance", min_distance)):
+            non_negative(value, name)
         if world is not None and world_file is not None:
             raise InvalidArgumentError("give world or world_file, not both")
         self.worlds: tuple[World, ...] | None = None
@@ -174,6 +179,7 @@ class NavigationEnv(gymnasium.Env[ObsType, ObsType]):
         self.observation_space = spaces.Box(low, high.astype(np.float32), dtype=np.float32)
         self.action_space = spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
         self.sim: Simulator | None = None
+        self._ended: str | None = None
         self._obs = np.zeros(n + 2, dtype=np.float32)
 
     def reset(
@@ -202,18 +208,27 @@ class NavigationEnv(gymnasium.Env[ObsType, ObsType]):
             goal_tolerance=self.goal_tolerance,
             record=self.render_mode is not None,
         )
+        self._ended = None
         return self._observation(), self._info(None)
 
     def step(self, action: ObsType) -> tuple[ObsType, SupportsFloat, bool, bool, dict[str, Any]]:
         sim = self.sim
         if sim is None:
             raise gymnasium.error.ResetNeeded("call reset() before step()")
+        if self._ended is not None:
+            raise gymnasium.error.ResetNeeded(f"the episode has ended ({self._ended}); call "
+                                              "reset() before step()")  # fmt: skip
         try:
-            a = np.asarray(action, dtype=np.float64)
+            a = np.asarray(action)
         except (TypeError, ValueError):
             raise InvalidArgumentError(
                 f"action must be a velocity (vx, vy); got {type(action).__name__}"
             ) from None
+        if a.dtype.kind not in "iuf":
+            raise InvalidArgumentError(
+                f"action must be 2 real numbers (vx, vy); got {a.dtype} values"
+            )
+        a = a.astype(np.float64)
         if a.shape != (2,) or not np.isfinite(a).all():
             raise InvalidArgumentError(
                 f"action must be 2 finite numbers (vx, vy), as the action space {self.action_space}"
@@ -228,6 +243,8 @@ class NavigationEnv(gymnasium.Env[ObsType, ObsType]):
             reward -= 10.0
         terminated = res.reached or (res.contact and self.terminate_on_collision)
         truncated = not terminated and sim.t >= self.max_steps
+        if terminated or truncated:
+            self._ended = "terminated" if terminated else "truncated"
         return self._observation(), float(reward), terminated, truncated, self._info(res)
 
     def _observation(self) -> ObsType:

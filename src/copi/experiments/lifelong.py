@@ -35,7 +35,7 @@ import numpy as np
 from copi._files import file_sha
 from copi._rng import check_seed
 from copi._validation import check_count, positive_int
-from copi.errors import InvalidArgumentError, InvalidWorldError
+from copi.errors import InvalidArgumentError, InvalidWorldError, MethodError
 from copi.learning import Capabilities
 from copi.methods import (
     LIFELONG_METHODS,
@@ -276,10 +276,14 @@ def live(
     strategy = run.strategy if run.sensing == "sensor" else "greedy"
     for t, (base, optimal) in enumerate(zip(sims, optima, strict=True)):
         sim = copy.deepcopy(base)
-        res = run_episode(
-            agent, sim, sensing=run.sensing, max_steps=step_limit(optimal),
-            strategy=strategy, origin=origin,
-        )  # fmt: skip
+        try:
+            res = run_episode(
+                agent, sim, sensing=run.sensing, max_steps=step_limit(optimal),
+                strategy=strategy, origin=origin,
+            )  # fmt: skip
+        except MethodError as exc:
+            raise MethodError(f"{exc} (life {life}, task {t} of {config.family}, seed "
+                              f"{config.seed})") from None  # fmt: skip
         success = res.outcome == "success"
         causal = getattr(steering, "causal", None)
         rows.append(

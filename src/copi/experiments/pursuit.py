@@ -25,7 +25,14 @@ from copi.methods import (
 )
 from copi.online import ContextController
 from copi.results import GameRow
-from copi.runs import MAX_EPISODES, code_version, load_capabilities, resolve_inputs, run_one
+from copi.runs import (
+    MAX_EPISODES,
+    checked_act,
+    code_version,
+    load_capabilities,
+    resolve_inputs,
+    run_one,
+)
 from copi.world import RangeSensor
 
 __all__ = [
@@ -172,7 +179,7 @@ def run_game(config: PursuitConfig, k: int, agent: Agent | None = None) -> GameR
             norm = float(np.hypot(*wish))
             far = np.asarray(wish, dtype=np.float64) * (1e3 / norm) if norm > 0 else wish
             obs = Observation(ranges=game.sim.ranges.copy(), goal=far, static=static)
-            velocity = agent.act(obs)
+            velocity = checked_act(agent, obs, game.t + 1)
         elif controller is None:
             velocity = wish
         else:

@@ -27,6 +27,7 @@ from copi.runs._draw import (
 from copi.runs._episode import (
     EnvEpisode,
     EpisodeOutcome,
+    checked_act,
     make_task,
     obstacle_future,
     optimal_to_goal,
@@ -49,6 +50,7 @@ __all__ = [
     "MAX_TASKS",
     "Series",
     "check_family_inputs",
+    "checked_act",
     "check_world_file",
     "code_version",
     "draw_episode",

@@ -20,7 +20,7 @@ import numpy as np
 
 from copi._files import file_sha
 from copi.core import Agent, Sensing
-from copi.errors import InvalidWorldError, WorldFileError
+from copi.errors import InvalidWorldError, MethodError, WorldFileError
 from copi.learning import Capabilities
 from copi.online import ContextController, LearntAgent, Mapping
 from copi.planning import shortest_path
@@ -319,11 +319,15 @@ class Episode:
         """Run ``agent`` at ``sensing`` on a fresh copy (or on ``sim``, a copy the caller
         keeps) within the step limit; ``strategy``: the global strategy at level
         ``sensor`` (above it, the method follows the route)."""
-        return run_episode(
-            agent, self.fresh() if sim is None else sim, sensing=sensing,
-            max_steps=self.max_steps, end_on_contact=end_on_contact,
-            strategy=strategy if sensing == "sensor" else "greedy",
-        )  # fmt: skip
+        try:
+            return run_episode(
+                agent, self.fresh() if sim is None else sim, sensing=sensing,
+                max_steps=self.max_steps, end_on_contact=end_on_contact,
+                strategy=strategy if sensing == "sensor" else "greedy",
+            )  # fmt: skip
+        except MethodError as exc:
+            raise MethodError(f"{exc} (episode {self.k} of {self.family}, seed {self.seed}, "
+                              f"level {sensing})") from None  # fmt: skip
 
     def row(
         self,

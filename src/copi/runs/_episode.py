@@ -13,13 +13,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from copi.core import Agent, Observation, Sensing, Task, check_sensing
-from copi.errors import CopiError, InvalidArgumentError
+from copi.errors import CopiError, InvalidArgumentError, MethodError
 from copi.planning import length_error_bound, shortest_path
 from copi.world import Simulator
 
 __all__ = [
     "EnvEpisode",
     "EpisodeOutcome",
+    "checked_act",
     "make_task",
     "obstacle_future",
     "optimal_to_goal",
@@ -54,6 +55,58 @@ class EpisodeOutcome:
     """Steps on which the method commanded no motion."""
     counters: dict[str, Any]
     """Method-specific diagnostics (e.g. copi's unfamiliar rate)."""
+
+
+def _shown(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _broke(agent: Agent, what: str, exc: BaseException) -> MethodError:
+    """The one-line error of a method whose ``what`` raised ``exc`` (its own error, an
+    exit it called, running out of memory: all of them the method's, not copi's)."""
+    if isinstance(exc, SystemExit):
+        did = f"called sys.exit({exc.code!r})"
+    else:
+        did = f"raised {type(exc).__name__}" + (f": {exc}" if str(exc) else "")
+    return MethodError(f"method {agent.name!r}: {what} {did}")
+
+
+def checked_act(agent: Agent, obs: Observation, step: int) -> NDArray[np.float64]:
+    """``agent.act(obs)`` as a velocity: 2 finite real numbers, float64. What the method
+    raises (or a non-velocity it returns) is a :class:`~copi.errors.MethodError` naming
+    it and the step; Ctrl-C and copi's own errors pass through."""
+    try:
+        action = agent.act(obs)
+    except (KeyboardInterrupt, CopiError):
+        raise
+    except BaseException as exc:  # SystemExit and MemoryError too: the method's own
+        raise _broke(agent, f"act at step {step}", exc) from None
+    return velocity_of(action, agent, step)
+
+
+def velocity_of(action: Any, agent: Agent, step: int) -> NDArray[np.float64]:
+    """``action`` as a float64 velocity of shape (2,), or the one-line
+    :class:`~copi.errors.MethodError` saying what the method returned instead."""
+    if isinstance(action, np.ndarray) and action.dtype == np.float64 and action.shape == (2,):
+        a = action
+    else:
+        try:
+            a = np.asarray(action)
+        except Exception:
+            a = np.asarray(None)
+        if a.shape != (2,) or a.dtype.kind not in "iuf":
+            raise MethodError(
+                f"method {agent.name!r}: act returned {_shown(action)} at step {step}; "
+                "expected a velocity: 2 real numbers"
+            )
+        a = a.astype(np.float64)
+    if not (math.isfinite(a[0]) and math.isfinite(a[1])):
+        raise MethodError(
+            f"method {agent.name!r}: act returned {a.tolist()} at step {step}; expected a "
+            "velocity of finite numbers"
+        )
+    return a
 
 
 def optimal_to_goal(sim: Simulator, *, quad_segs: int = 16) -> float:
@@ -165,9 +218,13 @@ def run_episode(
     rank = check_sensing(sensing, agent.sensing, method=agent.name)
     world = sim.world
     sensor = sim.sensor
-    agent.reset(
-        make_task(sim, sensing, strategy, lifelong=origin is not None, max_steps=max_steps)
-    )
+    task = make_task(sim, sensing, strategy, lifelong=origin is not None, max_steps=max_steps)
+    try:
+        agent.reset(task)
+    except (KeyboardInterrupt, CopiError):
+        raise
+    except BaseException as exc:
+        raise _broke(agent, "reset", exc) from None
     prev_centers = sim.centers.copy()
     velocities = sim.speed * np.column_stack([np.cos(sim.headings), np.sin(sim.headings)])
     length = 0.0
@@ -196,8 +253,14 @@ def run_episode(
             odometry=None if origin is None else pos - origin,
         )
         t0 = clock()
-        action = agent.act(obs)
+        try:
+            action = agent.act(obs)
+        except (KeyboardInterrupt, CopiError):
+            raise
+        except BaseException as exc:  # SystemExit and MemoryError too: the method's own
+            raise _broke(agent, f"act at step {steps}", exc) from None
         t_decide += clock() - t0
+        action = velocity_of(action, agent, steps)
         if action[0] == 0.0 and action[1] == 0.0:
             no_policy += 1
         x, y = pos
@@ -227,8 +290,16 @@ def run_episode(
         outcome = "success"
     else:
         outcome = "timeout"
-    agent.finish(outcome)
-    counters = agent.counters()
+    try:
+        agent.finish(outcome)
+        counters = agent.counters()
+    except (KeyboardInterrupt, CopiError):
+        raise
+    except BaseException as exc:
+        raise _broke(agent, "finish or counters", exc) from None
+    if not isinstance(counters, dict):
+        raise MethodError(f"method {agent.name!r}: counters returned {_shown(counters)}; "
+                          "expected a dict of numbers by name")  # fmt: skip
     return EpisodeOutcome(
         outcome=outcome,
         reached=reached,

@@ -12,7 +12,10 @@ from copi.errors import InvalidArgumentError
 from copi.geometry import cast_rays, ring_angles
 from copi.world._world import World
 
-__all__ = ["RangeSensor"]
+__all__ = ["MAX_RAYS", "RangeSensor"]
+
+MAX_RAYS = 4096
+"""Most rays a ring may have (copi's is 32; 4,096 is a ray every 0.09 degrees)."""
 
 
 @dataclass(frozen=True)
@@ -40,6 +43,11 @@ class RangeSensor:
 
     def __post_init__(self) -> None:
         positive_int(self.n_rays, "n_rays")
+        if self.n_rays > MAX_RAYS:
+            raise InvalidArgumentError(
+                f"n_rays must be at most {MAX_RAYS:,} (a ring of more is a typing error, not "
+                f"a sensor); got {self.n_rays:,}"
+            )
         mr = float(self.max_range)
         if not np.isfinite(mr) or mr <= 0:
             raise InvalidArgumentError(f"max_range must be a finite number > 0; got {mr}")

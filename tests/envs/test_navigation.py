@@ -148,8 +148,10 @@ def test_rgb_array_is_fast_and_sized() -> None:
     frames = []
     t0 = time.perf_counter()
     for _ in range(30):
-        env.step(env.action_space.sample())
+        *_, terminated, truncated, _ = env.step(env.action_space.sample())
         frames.append(env.render())
+        if terminated or truncated:  # an episode that ended is not stepped on
+            env.reset()
     elapsed = time.perf_counter() - t0
     assert all(f is not None and f.shape == (64, 64, 3) for f in frames)
     assert elapsed < 1.0  # >= 30 frames per second, steps included

@@ -10,7 +10,12 @@ their benchmark maps into worlds. :func:`family_stats` measures the world famili
 
 from __future__ import annotations
 
-from copi.planning._cspace import configuration_space, length_error_bound, shortest_path
+from copi.planning._cspace import (
+    check_plannable,
+    configuration_space,
+    length_error_bound,
+    shortest_path,
+)
 from copi.planning._family_stats import FamilyStats, family_stats, mean_free_width
 from copi.planning._grid import GridPlanner
 from copi.planning._visibility import Plan, VisibilityGraph
@@ -20,6 +25,7 @@ __all__ = [
     "GridPlanner",
     "Plan",
     "VisibilityGraph",
+    "check_plannable",
     "configuration_space",
     "family_stats",
     "length_error_bound",

@@ -12,7 +12,8 @@ from shapely.geometry.base import BaseGeometry
 from copi._validation import FloatArray, as_discs, as_vector
 from copi.errors import InvalidArgumentError, InvalidQueryError
 from copi.geometry.kernels import clearance as _clearance_kernel
-from copi.planning._visibility import Plan, VisibilityGraph
+from copi.planning import kernels
+from copi.planning._visibility import Plan, VisibilityGraph, check_work, rings_of
 from copi.world import World
 
 __all__ = ["configuration_space", "length_error_bound", "shortest_path"]
@@ -100,6 +101,15 @@ def configuration_space(
         return free
     blocked = shapely.union_all(np.concatenate(parts))
     return shapely.difference(free, blocked)
+
+
+def check_plannable(space: World | BaseGeometry, *, radius: float = 0.0) -> None:
+    """Refuse, in one line, a world whose configuration space for an agent of ``radius``
+    is too fine for the exact planner (:func:`~copi.planning._visibility.check_work`):
+    before a run, rather than at its first episode."""
+    xy, starts = rings_of(configuration_space(space, radius=radius))
+    if len(xy):
+        check_work(len(kernels.reflex_vertices(xy, starts)), len(xy))
 
 
 def shortest_path(

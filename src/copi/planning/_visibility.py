@@ -14,10 +14,40 @@ from shapely.geometry import MultiPolygon, Polygon
 from shapely.geometry.base import BaseGeometry
 
 from copi._validation import FloatArray, as_vector
-from copi.errors import InvalidArgumentError, InvalidQueryError
+from copi.errors import InvalidArgumentError, InvalidQueryError, InvalidWorldError
 from copi.planning import kernels
 
-__all__ = ["Plan", "VisibilityGraph"]
+MAX_WORK = 2e11
+"""Most (corner pair, edge) tests a visibility graph may take to build (corners squared
+times vertices; about 40 s on one core at 5e9 a second): a free space beyond it (the
+configuration space of a whole 256 x 256 map at one cell a step has 8.7e12) is refused
+instead of planned for hours."""
+
+__all__ = ["Plan", "VisibilityGraph", "check_work", "rings_of"]
+
+
+def rings_of(geometry: BaseGeometry) -> tuple[FloatArray, NDArray[np.int64]]:
+    """The rings of a (Multi)Polygon free space as the kernels take them: vertices ``xy``
+    (free space on the left) and each ring's first index in ``starts``."""
+    polys = [shapely.geometry.polygon.orient(p, 1.0) for p in _polygons(geometry)]
+    rings = [np.asarray(r.coords)[:-1] for p in polys for r in (p.exterior, *p.interiors)]
+    rings = [r for r in rings if len(r) >= 3]
+    xy = np.ascontiguousarray(np.vstack(rings), dtype=np.float64) if rings else np.zeros((0, 2))
+    starts = np.concatenate([[0], np.cumsum([len(r) for r in rings])]).astype(np.int64)
+    return xy, starts
+
+
+def check_work(corners: int, vertices: int) -> None:
+    """Refuse a free space whose visibility graph would take more than :data:`MAX_WORK`
+    tests to build, saying how much it would take and what to do."""
+    work = float(corners) ** 2 * vertices
+    if work > MAX_WORK:
+        raise InvalidWorldError(
+            f"the free space has {corners:,} corners on {vertices:,} vertices: its visibility "
+            f"graph would test {work:.1e} pairs against edges, more than the planner's "
+            f"{MAX_WORK:.0e} (about a minute); give a simpler world (a Moving AI map imported "
+            "one cell a step: import it with --passage)"
+        )
 
 
 @dataclass(frozen=True)
@@ -108,14 +138,7 @@ class VisibilityGraph:
             raise InvalidArgumentError(
                 f"free space must be a Shapely polygon; got {type(geometry).__name__}"
             )
-        polys = [shapely.geometry.polygon.orient(p, 1.0) for p in _polygons(geometry)]
-        rings = [np.asarray(r.coords)[:-1] for p in polys for r in (p.exterior, *p.interiors)]
-        rings = [r for r in rings if len(r) >= 3]
-        if rings:
-            xy = np.ascontiguousarray(np.vstack(rings), dtype=np.float64)
-        else:
-            xy = np.zeros((0, 2))
-        starts = np.concatenate([[0], np.cumsum([len(r) for r in rings])]).astype(np.int64)
+        xy, starts = rings_of(geometry)
         scale = max(1.0, float(np.abs(xy).max())) if len(xy) else 1.0
         eps = 1e-9 * scale
         pins = np.zeros((0, 2))
@@ -128,6 +151,7 @@ class VisibilityGraph:
             if len(pins):
                 pinned = (np.abs(xy[nodes][:, None, :] - pins[None]).max(-1) <= eps).any(1)
                 nodes = np.ascontiguousarray(nodes[~pinned])
+            check_work(len(nodes), len(xy))
             ei, ej = kernels.visibility_edges(xy, starts, nodes, eps, pins)
         else:
             nodes = np.zeros(0, dtype=np.int64)

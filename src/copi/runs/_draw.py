@@ -23,7 +23,7 @@ from copi.core import Agent, Sensing
 from copi.errors import InvalidWorldError, MethodError, WorldFileError
 from copi.learning import Capabilities
 from copi.online import ContextController, LearntAgent, Mapping
-from copi.planning import shortest_path
+from copi.planning import check_plannable, shortest_path
 from copi.results import EpisodeRow
 from copi.runs._episode import EpisodeOutcome, optimal_to_goal, run_episode
 from copi.world import RangeSensor, Simulator, World, check_task, load_worlds, sample_world
@@ -240,11 +240,13 @@ def result_row(
 
 
 def check_world_file(path: str | os.PathLike[str], *, agent_radius: float = 0.3) -> None:
-    """Refuse a world file any of whose worlds has no valid task, naming the file and the
-    world (before a run is registered)."""
+    """Refuse a world file any of whose worlds has no valid task, or is too fine for the
+    planner that measures every episode's optimum, naming the file and the world (before
+    a run is registered)."""
     for i, world in enumerate(load_worlds(path)):
         try:
             check_task(world, radius=agent_radius)
+            check_plannable(world, radius=agent_radius)
         except InvalidWorldError as exc:
             raise WorldFileError(f"{path}: world {i}: {exc}") from None
 

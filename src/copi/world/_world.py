@@ -30,6 +30,12 @@ def _at(*where: str | int) -> Iterator[None]:
         raise InvalidWorldError(str(exc), where=where) from None
 
 
+MAX_VERTICES = 100_000
+"""Most vertices a world may have, boundary and holes together (copi's families draw at
+most a few hundred; a Moving AI map of 512 x 512 cells, a few thousand)."""
+MAX_COORDINATE = 1e6
+"""Largest absolute coordinate of a world, in agent steps (the agent moves 1 a step; a
+world of 1e300 is a typing error, and its arithmetic overflows)."""
 MAX_OBSTACLES = 10_000
 """More moving obstacles than this in one world are refused (a typo, not a crowd)."""
 
@@ -177,8 +183,24 @@ class World:
             raise InvalidWorldError(f"world {self.name!r}: {exc}", where=where) from None
 
     def _validate(self) -> None:
+        holes_given = self.holes if self.holes is not None else ()
+        try:
+            n = len(self.boundary) + sum(len(h) for h in holes_given)
+        except TypeError:
+            n = 0  # not lists of vertices: the ring checks below say so
+        if n > MAX_VERTICES:
+            raise InvalidWorldError(
+                f"a world may have at most {MAX_VERTICES:,} vertices (walls and holes "
+                f"together); this one has {n:,}"
+            )
         with _at("boundary"):
             boundary = _simple_ring(self.boundary, "boundary")
+        big = float(np.abs(boundary).max())
+        if big > MAX_COORDINATE:
+            raise InvalidWorldError(
+                f"coordinates must be within +-{MAX_COORDINATE:,.0f} agent steps; the "
+                f"boundary reaches {big:.3g}", where=("boundary",),
+            )
         if isinstance(self.holes, np.ndarray) and self.holes.ndim == 2:
             raise InvalidWorldError(
                 "holes must be a list of polygons (each a list of [x, y]); got one polygon",

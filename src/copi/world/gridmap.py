@@ -22,11 +22,22 @@ from numpy.typing import NDArray
 from shapely.geometry import MultiPolygon, Polygon, box
 
 from copi.errors import MapFileError
+from copi.world._world import MAX_VERTICES
 
-__all__ = ["BLOCKED", "PASSABLE", "GridMap", "cell_center", "free_geometry", "read_map"]
+__all__ = [
+    "BLOCKED",
+    "PASSABLE",
+    "GridMap",
+    "cell_center",
+    "corner_count",
+    "free_geometry",
+    "read_map",
+]
 
 PASSABLE = frozenset(".G")
 BLOCKED = frozenset("@OTSW")
+HEADER_KEYS = ("type", "height", "width")
+"""The keys of a Moving AI map's header."""
 MAX_SIDE = 8192
 """The largest height or width of a map read (Moving AI's largest are 1024 x 1024)."""
 
@@ -70,10 +81,18 @@ def read_map(path: str | os.PathLike[str]) -> GridMap:
             raise MapFileError(
                 f"{p}:{i + 1}: expected 'key value' header or 'map'; got {lines[i]!r}"
             )
+        if parts[0] in header:
+            raise MapFileError(f"{p}:{i + 1}: the header gives {parts[0]!r} twice")
+        if parts[0] not in HEADER_KEYS:
+            raise MapFileError(f"{p}:{i + 1}: unknown header key {parts[0]!r}; a Moving AI map "
+                               f"has {', '.join(HEADER_KEYS)}")  # fmt: skip
         header[parts[0]] = parts[1]
         i += 1
     if i == len(lines):
         raise MapFileError(f"{p}: no 'map' line; not a Moving AI map")
+    if header.get("type", "octile") != "octile":
+        raise MapFileError(f"{p}: type must be octile (a grid of square cells); got "
+                           f"{header['type']!r}")  # fmt: skip
     try:
         h, w = int(header["height"]), int(header["width"])
     except (KeyError, ValueError):
@@ -87,10 +106,18 @@ def read_map(path: str | os.PathLike[str]) -> GridMap:
     rows = lines[i + 1 : i + 1 + h]
     if len(rows) != h:
         raise MapFileError(f"{p}: expected {h} map rows; found {len(rows)}")
+    extra = [k for k, line in enumerate(lines[i + 1 + h :]) if line.strip()]
+    if extra:
+        raise MapFileError(f"{p}:{i + 2 + h + extra[0]}: more rows than the header's height "
+                           f"{h}")  # fmt: skip
     grid = np.zeros((h, w), dtype=bool)
     for y, row in enumerate(rows):
-        if len(row) < w:
-            raise MapFileError(f"{p}:{i + 2 + y}: expected {w} cells; found {len(row)}")
+        if len(row) != w:
+            what = " (trailing spaces?)" if row[w:].strip() == "" and len(row) > w else ""
+            raise MapFileError(
+                f"{p}:{i + 2 + y}: expected {w} cells, as the header's width says; found "
+                f"{len(row)}{what}"
+            )
         chars = set(row[:w])
         unknown = chars - PASSABLE - BLOCKED
         if unknown:
@@ -108,9 +135,28 @@ def cell_center(grid: GridMap, cell: tuple[int, int]) -> NDArray[np.float64]:
     return np.array([x + 0.5, grid.height - y - 0.5])
 
 
+def corner_count(free: NDArray[np.bool_]) -> int:
+    """The vertices the free space of a grid (``free[y, x]``) has as polygons: grid
+    points where one or three of the four cells around are free, and twice those where
+    two diagonal ones are (a pinch). Counted in a few array operations, so that a map too
+    fine for a world is refused before its geometry is built."""
+    p = np.pad(free, 1).astype(np.int8)
+    a, b, c, d = p[:-1, :-1], p[:-1, 1:], p[1:, :-1], p[1:, 1:]
+    s = a + b + c + d
+    pinch = (s == 2) & (a == d)
+    return int(np.count_nonzero((s == 1) | (s == 3)) + 2 * np.count_nonzero(pinch))
+
+
 def free_geometry(grid: GridMap) -> Polygon | MultiPolygon:
     """The closed free space of a map in world coordinates (blocked cells are closed
     unit squares; see :func:`cell_center`)."""
+    corners = corner_count(grid.free)
+    if corners > MAX_VERTICES:
+        raise MapFileError(
+            f"{grid.name}: its free space has {corners:,} corners, more than the "
+            f"{MAX_VERTICES:,} vertices a world may have (copi's sensor and planner go "
+            "through every wall edge); crop the map, or read it as a grid"
+        )
     h, w = grid.free.shape
     runs = []
     for y in range(h):

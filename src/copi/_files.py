@@ -16,6 +16,7 @@ from __future__ import annotations
 import hashlib
 import io
 import os
+import stat
 import tempfile
 import zipfile
 from collections.abc import Callable, Iterable, Iterator, Mapping
@@ -28,6 +29,7 @@ import numpy as np
 from copi.errors import InvalidArgumentError
 
 __all__ = [
+    "regular_file",
     "atomic_path",
     "atomic_write",
     "check_outputs",
@@ -65,6 +67,18 @@ def file_kind(path: str | os.PathLike[str]) -> str | None:
     ('text', None)
     """
     p = Path(path)
+    try:
+        st = p.stat()
+    except FileNotFoundError:
+        return None
+    except NotADirectoryError:
+        return "path below a file"
+    except OSError:
+        return "unreadable file"
+    if stat.S_ISDIR(st.st_mode):
+        return "directory"
+    if not stat.S_ISREG(st.st_mode):  # opening a FIFO would wait for a writer
+        return "device, pipe or socket"
     try:
         with open(p, "rb") as fh:
             head = fh.read(512)
@@ -272,3 +286,21 @@ def file_sha(path: str | os.PathLike[str]) -> str:
         for block in iter(lambda: fh.read(1 << 20), b""):
             h.update(block)
     return h.hexdigest()
+
+
+def regular_file(path: str | os.PathLike[str], what: str, error: type[Exception]) -> Path:
+    """``path`` if it names a regular file; otherwise one ``error`` saying what it is
+    (missing, a directory, or a device, pipe or socket, which would be read forever or
+    block: ``/dev/zero``, a FIFO)."""
+    p = Path(path)
+    try:
+        st = p.stat()
+    except FileNotFoundError:
+        raise error(f"{p}: no such {what}") from None
+    except OSError as exc:
+        raise error(f"{p}: cannot read ({exc.strerror or exc})") from None
+    if stat.S_ISDIR(st.st_mode):
+        raise error(f"{p}: is a directory, expected a {what}")
+    if not stat.S_ISREG(st.st_mode):
+        raise error(f"{p}: not a regular file (a device, a pipe or a socket), expected a {what}")
+    return p

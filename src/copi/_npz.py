@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from copi._files import regular_file
 from copi.errors import CopiError
 
 __all__ = ["read_metadata", "read_npz"]
@@ -43,11 +44,7 @@ def read_npz(
     ``max_member`` bytes (or all of them to more than ``max_total``), or a member that is
     not a plain array. ``what`` names the kind of file ("capabilities file").
     """
-    p = Path(path)
-    if not p.exists():
-        raise error(f"{p}: no such {what}")
-    if p.is_dir():
-        raise error(f"{p}: is a directory, expected a .npz {what}")
+    p = regular_file(path, what, error)
     out: dict[str, NDArray[Any]] = {}
     total = 0
     try:
@@ -65,15 +62,7 @@ def read_npz(
                         "all)"
                     )
                 with zf.open(info) as fh:
-                    try:
-                        out[name] = np.lib.format.read_array(fh, allow_pickle=False)
-                    except ValueError as exc:
-                        why = (
-                            "holds Python objects, which copi never loads"
-                            if "allow_pickle" in str(exc) or "Object arrays" in str(exc)
-                            else f"is not an array ({str(exc).splitlines()[0]})"
-                        )
-                        raise error(f"{p}: member {name!r} {why}") from None
+                    out[name] = _array(fh, p, name, error, what, max_member)
     except (zipfile.BadZipFile, EOFError, zlib.error) as exc:
         raise error(f"{p}: not a complete .npz archive (truncated or corrupt: {exc})") from None
     except (NotImplementedError, RuntimeError) as exc:  # other compression, encryption
@@ -81,6 +70,40 @@ def read_npz(
     except OSError as exc:
         raise error(f"{p}: cannot read ({exc.strerror or exc})") from None
     return out
+
+
+def _array(
+    fh: Any, p: Path, name: str, error: type[CopiError], what: str, most: int
+) -> NDArray[Any]:
+    """One ``.npy`` member, its header read first: an array whose header claims more
+    bytes than ``most`` (whatever the zip says of its size), or Python objects, is
+    refused before anything is allocated."""
+    try:
+        version = np.lib.format.read_magic(fh)
+        if version == (1, 0):
+            shape, fortran, dtype = np.lib.format.read_array_header_1_0(fh)
+        elif version == (2, 0):
+            shape, fortran, dtype = np.lib.format.read_array_header_2_0(fh)
+        else:
+            raise ValueError(f"npy format version {version}")
+    except ValueError as exc:
+        raise error(f"{p}: member {name!r} is not an array ({str(exc).splitlines()[0]})") from None
+    if dtype.hasobject:
+        raise error(f"{p}: member {name!r} holds Python objects, which copi never loads")
+    count = 1
+    for d in shape:
+        count *= int(d)
+    size = count * dtype.itemsize
+    if size > most:
+        raise error(
+            f"{p}: member {name!r} claims {size:,} bytes ({'x'.join(map(str, shape)) or 1} "
+            f"{dtype}), more than a {what} holds (at most {most:,})"
+        )
+    data = fh.read(size)
+    if len(data) != size:
+        raise error(f"{p}: member {name!r} is cut short ({len(data):,} of {size:,} bytes)")
+    arr = np.frombuffer(data, dtype=dtype, count=count)
+    return arr.reshape(shape, order="F" if fortran else "C").copy()
 
 
 def read_metadata(

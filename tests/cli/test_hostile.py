@@ -310,7 +310,7 @@ MAPS = [
     ("type octile\nheight 100000\nwidth 100000\nmap\n.\n", "height and width must be in"),
     ("type octile\nheight 2\nwidth 2\nmap\n@@\n@@\n", "no passable cell"),
     ("type octile\nheight 2\nwidth 2\nmap\n..\n", "expected 2 map rows; found 1"),
-    ("type octile\nheight 2\nwidth 3\nmap\n...\n..\n", "expected 3 cells; found 2"),
+    ("type octile\nheight 2\nwidth 3\nmap\n...\n..\n", "expected 3 cells, as the header's width says; found 2"),
     ("type octile\nheight 1\nwidth 2\nmap\n.?\n", "unknown cell characters ['?']"),
     ("type octile\nheight two\nwidth 2\nmap\n..\n", "integer 'height' and 'width'"),
     ("type octile\nwidth 2\n", "no 'map' line"),

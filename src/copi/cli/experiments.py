@@ -228,7 +228,8 @@ def benchmark_command(
     check_outputs(
         {"the benchmark's directory": (output, "directory"),
          "the results store": (output / "benchmark.sqlite", "results"),
-         "the report": (output / "benchmark.md", "text")},
+         "the report": (output / "benchmark.md", "text"),
+         "the report's figure": (output / "benchmark_success_excess.png", "png")},
         inputs=[world_file],
     )  # fmt: skip
     if world_file is not None:

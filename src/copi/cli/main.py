@@ -78,6 +78,13 @@ def _run(argv: list[str] | None) -> None:
     """Parse and invoke without click's own handlers, so that every error comes here."""
     command = typer.main.get_command(app)
     args = sys.argv[1:] if argv is None else list(argv)
+    for i, arg in enumerate(args):
+        # an empty value ("-o ''") would be read as the current directory: nothing of
+        # copi's takes an empty name, so it is a slip, refused before anything is written
+        if arg == "" or (arg.startswith("--") and arg.endswith("=")):
+            where = arg[:-1] if arg else (args[i - 1] if i else "the command")
+            raise CopiError(f"an empty value for {where}: give a name (or . for the "
+                            "current directory)")  # fmt: skip
     if ("--help" in args or "-h" in args) and args and args[0] in _NAMED:
         # the registry imports every method: only when help is asked for
         from copi.cli._common import names_epilog

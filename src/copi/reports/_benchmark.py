@@ -95,6 +95,7 @@ def _overview(
     rule = "|---|---|---|" + "---|" * len(families)
     success = [head, rule]
     delta = [head, rule]
+    most = {f: max((s["n"] for s in table[f].values()), default=0) for f in families}
     for arm in arms:
         cells, deltas = [], []
         for family in families:
@@ -108,7 +109,9 @@ def _overview(
             if pair is not None and pair[0].excludes_zero and pair[0].n >= MIN_PAIRS:
                 mark = " ▲" if pair[0].estimate > 0 else " ▽"
             ex = s["excess_median"]
-            cells.append(f"{_num(100 * s['success'], '.1f')}{mark} ({_num(100 * ex, '.0f')})")
+            fewer = f", n = {s['n']}" if s["n"] != most[family] else ""  # not every episode
+            cells.append(f"{_num(100 * s['success'], '.1f')}{mark} ({_num(100 * ex, '.0f')})"
+                         f"{fewer}")  # fmt: skip
             deltas.append("reference" if pair is None else format_difference(pair[0]))
         label = f"| {_label(arm.method, reference)} | {arm.sensing} | {arm.strategy} | "
         success.append(label + " | ".join(cells) + " |")
@@ -116,7 +119,8 @@ def _overview(
     return [
         "## Overview",
         "",
-        f"Success in % (median excess in %); ▲ / ▽: more / fewer successes than {reference} at "
+        f"Success in % (median excess in %; n = N where a row ran fewer episodes of the "
+        f"family than the others); ▲ / ▽: more / fewer successes than {reference} at "
         "the same level and strategy (oracle and future rows: its `map` row), the paired 95 % "
         "interval excluding zero. Each family's table below gives n, the other outcomes and "
         "the intervals.",

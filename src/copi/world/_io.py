@@ -10,7 +10,7 @@ from json.scanner import py_make_scanner  # type: ignore[attr-defined]
 from pathlib import Path
 from typing import Any
 
-from copi._files import atomic_write
+from copi._files import atomic_write, regular_file
 from copi.errors import CopiError, InvalidWorldError, WorldFileError
 from copi.world._world import World
 
@@ -46,7 +46,7 @@ def load_worlds(
     >>> [w.name for w in load_worlds(os.path.join(d, "w.json"))]
     ['tri']
     """
-    p = Path(path)
+    p = regular_file(path, "world file", WorldFileError)
     try:
         size = p.stat().st_size
         if size > max_bytes and p.is_file():

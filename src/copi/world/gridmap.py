@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -21,6 +20,7 @@ import shapely
 from numpy.typing import NDArray
 from shapely.geometry import MultiPolygon, Polygon, box
 
+from copi._files import regular_file
 from copi.errors import MapFileError
 from copi.world._world import MAX_VERTICES
 
@@ -60,7 +60,7 @@ class GridMap:
 
 def read_map(path: str | os.PathLike[str]) -> GridMap:
     """Read a ``.map`` file; a malformed one raises :class:`MapFileError` with its line."""
-    p = Path(path)
+    p = regular_file(path, "Moving AI map", MapFileError)
     try:
         size = p.stat().st_size
     except OSError as exc:

@@ -29,8 +29,9 @@ import numpy as np
 from copi.errors import InvalidArgumentError
 
 __all__ = [
-    "regular_file",
     "atomic_path",
+    "check_writable",
+    "regular_file",
     "atomic_write",
     "check_outputs",
     "file_kind",
@@ -304,3 +305,18 @@ def regular_file(path: str | os.PathLike[str], what: str, error: type[Exception]
     if not stat.S_ISREG(st.st_mode):
         raise error(f"{p}: not a regular file (a device, a pipe or a socket), expected a {what}")
     return p
+
+
+def check_writable(directory: str | os.PathLike[str], label: str) -> None:
+    """Refuse, before any work, a directory ``label`` cannot be written to (made if
+    missing, then a file created and removed there), in one line naming it."""
+    d = Path(directory) if str(directory) else Path(".")
+    try:
+        d.mkdir(parents=True, exist_ok=True)
+        fd, probe = tempfile.mkstemp(prefix=".copi-probe.", dir=d)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as exc:
+        raise InvalidArgumentError(
+            f"{d}: cannot write {label} there ({exc.strerror or exc}); choose another place"
+        ) from None

@@ -110,7 +110,8 @@ def test_a_short_training_beats_a_random_policy(tmp_path: Path) -> None:
         assert summary["steps"] >= 24_000 and (tmp_path / "p.png").is_file()
         curve = json.loads((tmp_path / "p.json").read_text())["curve"]
         assert curve[-1]["success"] == summary["curve"][-1]["success"]
-        assert [c["steps"] for c in curve][:2] == [6_000, 12_000] and len(curve) >= 4
+        # validated between rollouts (4 envs x 256 steps), at the first one past each 6,000
+        assert [c["steps"] for c in curve][:2] == [6_144, 12_288] and len(curve) >= 4
         from copi.runs import draw_episode
 
         trained = PPOAgent(weights=str(tmp_path / "p.npz"))

@@ -36,6 +36,8 @@ from copi.baselines._navground import (
     navground_available,
 )
 from copi.baselines._ppo import (
+    MAX_LAYERS,
+    MAX_WIDTH,
     PolicyFormatError,
     PolicyWeights,
     PPOAgent,
@@ -57,6 +59,8 @@ __all__ = [
     "CompassGuard",
     "DWA",
     "DiscTracker",
+    "MAX_LAYERS",
+    "MAX_WIDTH",
     "NAVGROUND_BEHAVIORS",
     "NavgroundAgent",
     "NavgroundMissingError",

@@ -50,6 +50,8 @@ from copi.errors import CopiError, InvalidArgumentError
 from copi.online import kernels
 
 __all__ = [
+    "MAX_LAYERS",
+    "MAX_WIDTH",
     "OBSERVATION",
     "PPOAgent",
     "PolicyFormatError",

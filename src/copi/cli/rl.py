@@ -9,7 +9,7 @@ from typing import Annotated
 
 import typer
 
-from copi._files import check_outputs
+from copi._files import check_outputs, check_writable
 from copi.cli._common import app, out, progress, seed_option
 
 rl_app = typer.Typer(help="Deep RL as copi's learning peer: train PPO policies.",
@@ -69,7 +69,9 @@ def train_command(
         log_std=log_std,
         net=widths, reward=Reward(),
     )  # fmt: skip
-    output.parent.mkdir(parents=True, exist_ok=True)
+    check_writable(output.parent, "the policy")  # before hours of training, not after
+    if checkpoints is not None:
+        check_writable(checkpoints, "checkpoints")
     command = "copi " + " ".join(shlex.quote(a) for a in sys.argv[1:])
     with progress() as bar:
         tid = bar.add_task("rl: environment steps", total=steps)

@@ -176,26 +176,59 @@ class LocalPolicyEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[NDArray[np.float32], dict[str, Any]]:
         super().reset(seed=seed)
+        # what replays this episode (state): the generator as the episode is drawn, and
+        # every action since
+        self._drawn_from = copy.deepcopy(self.np_random.bit_generator.state)
+        self._actions: list[NDArray[np.float64]] = []
         self._prev = None
         self._draw()
         self.t = 0
         self._ended = None
         return self._observe(), {}
 
+    def state(self) -> dict[str, Any]:
+        """What brings a fresh environment to this one's state (:meth:`restore`): the
+        random generator as this episode was drawn (JSON-able) and the actions taken
+        since, shape (t, 2). The simulator is deterministic, so replaying them rebuilds
+        everything else; nothing is pickled."""
+        if self._ended == "not started":
+            raise InvalidArgumentError("the environment has not been reset: no state")
+        actions = np.array(self._actions, dtype=np.float64).reshape(-1, 2)
+        return {"drawn_from": self._drawn_from, "actions": actions, "ended": self._ended}
+
+    def restore(self, state: dict[str, Any]) -> NDArray[np.float32]:
+        """Bring this environment to ``state`` (:meth:`state`) by drawing the same episode
+        and replaying its actions; returns the observation there."""
+        try:
+            self.np_random = np.random.default_rng()
+            self.np_random.bit_generator.state = state["drawn_from"]
+            actions = np.asarray(state["actions"], dtype=np.float64).reshape(-1, 2)
+        except (KeyError, TypeError, ValueError) as exc:
+            raise InvalidArgumentError(f"not an environment's state ({exc})") from None
+        if len(actions) > self.max_steps or not np.isfinite(actions).all():
+            raise InvalidArgumentError("not an environment's state (its actions are not "
+                                       "an episode's)")  # fmt: skip
+        obs, _ = self.reset()
+        for a in actions:
+            obs, *_ = self.step(a)
+        self._ended = state.get("ended")
+        return obs
+
     def step(
-        self, action: NDArray[np.float32]
+        self, action: NDArray[np.floating[Any]]
     ) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
         if self._ended is not None:
             why = "call reset() first" if self._ended == "not started" else (
                 f"the episode has ended ({self._ended}); call reset()")  # fmt: skip
             raise gymnasium.error.ResetNeeded(why)
-        a = np.asarray(action)
-        if a.shape != (2,) or a.dtype.kind not in "iuf":
+        given = np.asarray(action)
+        if given.shape != (2,) or given.dtype.kind not in "iuf":
             raise InvalidArgumentError(f"action must be 2 real numbers of shape (2,); got "
-                                       f"{a.dtype} values of shape {a.shape}")  # fmt: skip
-        a = a.astype(np.float64)
+                                       f"{given.dtype} values of shape {given.shape}")  # fmt: skip
+        a: NDArray[np.float64] = given.astype(np.float64)
         if not np.isfinite(a).all():
             raise InvalidArgumentError(f"action must be 2 finite numbers; got {a.tolist()}")
+        self._actions.append(a.copy())
         a = np.clip(a, -1.0, 1.0)
         norm = math.hypot(a[0], a[1])
         if norm > 1.0:

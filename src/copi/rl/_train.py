@@ -20,10 +20,10 @@ from typing import Any
 
 import numpy as np
 
-from copi._files import write_text
-from copi.baselines import PolicyWeights, PPOAgent, save_policy
+from copi._files import regular_file, write_text
+from copi.baselines import MAX_LAYERS, MAX_WIDTH, PolicyWeights, PPOAgent, save_policy
 from copi.envs.local_policy import LocalPolicyEnv, Reward
-from copi.errors import CopiError, InvalidArgumentError
+from copi.errors import CopiError, Interrupted, InvalidArgumentError
 from copi.experiments import PursuitConfig, run_game
 from copi.reports import finish_figure, new_figure
 from copi.runs import Episode
@@ -116,9 +116,16 @@ class TrainConfig:
                 raise InvalidArgumentError(f"{key} must be a number in [0, 1]; got {v!r}")
         if not (isinstance(self.log_std, int | float) and -5 <= self.log_std <= 2):
             raise InvalidArgumentError(f"log_std must be a number in [-5, 2]; got {self.log_std!r}")
-        if not self.net or not all(isinstance(h, int) and 1 <= h <= 1024 for h in self.net):
-            raise InvalidArgumentError(f"net must be 1 to 6 layer widths in 1 .. 1024; got "
-                                       f"{self.net!r}")  # fmt: skip
+        most = MAX_LAYERS - 1  # the action layer is the policy file's last
+        if not (1 <= len(self.net) <= most) or not all(
+            isinstance(h, int) and not isinstance(h, bool) and 1 <= h <= MAX_WIDTH
+            for h in self.net
+        ):
+            raise InvalidArgumentError(f"net must be 1 to {most} layer widths in 1 .. "
+                                       f"{MAX_WIDTH}; got {self.net!r}")  # fmt: skip
+        if not self.families or not self.levels:
+            raise InvalidArgumentError("families and levels must each name at least one; got "
+                                       f"families {self.families!r}, levels {self.levels!r}")
 
     def identity(self) -> dict[str, Any]:
         d = dataclasses.asdict(self)
@@ -220,22 +227,10 @@ def train(
     ckpt = None if checkpoints is None else Path(checkpoints)
     if ckpt is not None:
         ckpt.mkdir(parents=True, exist_ok=True)
-        state = ckpt / "last.pt"
-        meta = ckpt / "last.json"
-        if state.is_file() and meta.is_file():
-            saved = json.loads(meta.read_text())
-            # the same run: every setting but the budget (a run resumes to more steps)
-            same = {k: v for k, v in json.loads(json.dumps(config.identity())).items()
-                    if k != "steps"}  # fmt: skip
-            if {k: v for k, v in dict(saved.get("config") or {}).items() if k != "steps"} != same:
-                raise InvalidArgumentError(
-                    f"{ckpt} holds checkpoints of another training run; use another directory"
-                )
-            params = torch.load(state, weights_only=True, map_location="cpu")
-            model.set_parameters(params, exact_match=True)
-            model.num_timesteps = int(saved["steps"])
-            curve = list(saved["curve"])
-            elapsed0 = float(saved["seconds"])
+        saved = _read_checkpoint(ckpt, config)
+        if saved is not None:
+            elapsed0 = _restore(model, vec, saved)
+            curve = list(saved["meta"]["curve"])
 
     t0 = time.perf_counter()
 
@@ -243,6 +238,10 @@ def train(
         return export_policy(model, info={"algorithm": "PPO", **config.identity()})
 
     class Watch(BaseCallback):  # type: ignore[misc]
+        """Progress at every step; validation (and a checkpoint) between rollouts, where
+        the rollout buffer is empty, so that a resumed run goes on exactly as it would
+        have."""
+
         def __init__(self) -> None:
             super().__init__()
             self.next = (model.num_timesteps // validate_every + 1) * validate_every
@@ -250,10 +249,12 @@ def train(
         def _on_step(self) -> bool:
             if progress is not None:
                 progress(self.num_timesteps, config.steps)
-            if self.num_timesteps >= self.next:
-                self.next += validate_every
-                record()
             return True
+
+        def _on_rollout_start(self) -> None:
+            if model.num_timesteps >= self.next:
+                self.next = (model.num_timesteps // validate_every + 1) * validate_every
+                record()
 
     def record() -> None:
         seconds = elapsed0 + time.perf_counter() - t0
@@ -261,16 +262,18 @@ def train(
                       "success": validation_success(snapshot(), config,
                                                     validation_episodes)})  # fmt: skip
         if ckpt is not None:
-            torch.save(model.get_parameters(), ckpt / "last.pt.tmp")
-            os.replace(ckpt / "last.pt.tmp", ckpt / "last.pt")
-            write_text(ckpt / "last.json", json.dumps(
-                {"config": config.identity(), "steps": int(model.num_timesteps),
-                 "curve": curve, "seconds": seconds}), "json")  # fmt: skip
+            _write_checkpoint(ckpt, model, vec, config, curve, seconds)
 
     left = config.steps - model.num_timesteps
     if left > 0:
-        model.learn(total_timesteps=left, callback=Watch(), reset_num_timesteps=False,
-                    progress_bar=False)  # fmt: skip
+        try:
+            model.learn(total_timesteps=left, callback=Watch(), reset_num_timesteps=False,
+                        progress_bar=False)  # fmt: skip
+        except KeyboardInterrupt:
+            done = f"{int(curve[-1]['steps']):,} steps checkpointed in {ckpt}; rerun the same " \
+                "command to resume" if ckpt is not None and curve else (
+                    "nothing saved (give --checkpoints DIR to resume an interrupted run)")
+            raise Interrupted(done) from None
     if not curve or curve[-1]["steps"] < model.num_timesteps:
         record()
     seconds = elapsed0 + time.perf_counter() - t0
@@ -301,3 +304,142 @@ def _curve_figure(curve: list[dict[str, float]], path: Path, *, title: str) -> N
     ax.set_title(title, fontsize=9)
     ax.grid(alpha=0.3)
     finish_figure(fig, path)
+
+
+# -- checkpoints: what resumes a run exactly as it would have gone on --------------------
+
+
+def _write_checkpoint(ckpt: Path, model: Any, vec: Any, config: TrainConfig,
+                      curve: list[dict[str, float]], seconds: float) -> None:  # fmt: skip
+    """Everything the run's future depends on, between two rollouts: the weights and the
+    optimiser's state, every random generator (torch's, numpy's, Python's), and each
+    environment's state (:meth:`LocalPolicyEnv.state`), as tensors (``last.pt``, read
+    with ``weights_only``) and JSON (``last.json``); nothing pickled."""
+    import random
+
+    import torch
+
+    envs = [e.state() for e in vec.envs]
+    tensors = {
+        "params": model.get_parameters(),
+        "torch_rng": torch.get_rng_state(),
+        "last_obs": torch.from_numpy(np.asarray(model._last_obs, dtype=np.float32).copy()),
+        "episode_starts": torch.from_numpy(np.asarray(model._last_episode_starts,
+                                                      dtype=np.float32).copy()),  # fmt: skip
+        **{f"actions{i}": torch.from_numpy(s["actions"]) for i, s in enumerate(envs)},
+    }
+    kind, key, pos, has_gauss, cached = np.random.get_state()
+    meta = {
+        "config": config.identity(), "steps": int(model.num_timesteps),
+        "updates": int(model._n_updates), "curve": curve, "seconds": seconds,
+        "numpy_rng": [kind, np.asarray(key).tolist(), int(pos), int(has_gauss), float(cached)],
+        "python_rng": json.loads(json.dumps(random.getstate())),
+        "envs": [{"drawn_from": s["drawn_from"], "ended": s["ended"]} for s in envs],
+    }
+    torch.save(tensors, ckpt / "last.pt.tmp")
+    os.replace(ckpt / "last.pt.tmp", ckpt / "last.pt")
+    write_text(ckpt / "last.json", json.dumps(meta), "json")
+
+
+def _bad(ckpt: Path, what: str) -> InvalidArgumentError:
+    return InvalidArgumentError(f"{ckpt}: not a checkpoint of this training run ({what}); "
+                                "use another --checkpoints directory")  # fmt: skip
+
+
+def _read_checkpoint(ckpt: Path, config: TrainConfig) -> dict[str, Any] | None:
+    """The checkpoint in ``ckpt`` of this run (None when there is none), every part
+    checked: one clear line for a file that is not one, or of another run."""
+    import torch
+
+    state, meta_path = ckpt / "last.pt", ckpt / "last.json"
+    if not state.exists() and not meta_path.exists():
+        return None
+    for path in (state, meta_path):
+        regular_file(path, "checkpoint file", InvalidArgumentError)
+    if meta_path.stat().st_size > 1 << 26 or state.stat().st_size > 1 << 31:
+        raise _bad(ckpt, "a file larger than a checkpoint holds")
+    try:
+        meta = json.loads(meta_path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
+        raise _bad(ckpt, f"last.json is not JSON: {exc}") from None
+    if not isinstance(meta, dict):
+        raise _bad(ckpt, "last.json is not an object")
+    same = {k: v for k, v in json.loads(json.dumps(config.identity())).items() if k != "steps"}
+    saved = meta.get("config")
+    if not isinstance(saved, dict) or {k: v for k, v in saved.items() if k != "steps"} != same:
+        raise InvalidArgumentError(
+            f"{ckpt} holds checkpoints of another training run; use another directory"
+        )
+    steps = meta.get("steps")
+    if not (isinstance(steps, int) and not isinstance(steps, bool)
+            and 0 <= steps <= config.steps + config.envs * config.n_steps):  # fmt: skip
+        raise _bad(ckpt, f"it claims {steps!r} steps done, of a run of {config.steps:,}")
+    curve = meta.get("curve")
+    if not (isinstance(curve, list) and curve and all(
+        isinstance(c, dict) and all(isinstance(c.get(k), int | float) and not
+                                    isinstance(c.get(k), bool) and math.isfinite(c[k])
+                                    for k in ("steps", "seconds", "success"))
+        for c in curve) and curve[-1]["steps"] == steps):  # fmt: skip
+        raise _bad(ckpt, "its learning curve is missing or does not end at its steps")
+    seconds = meta.get("seconds")
+    if not (isinstance(seconds, int | float) and math.isfinite(seconds) and seconds >= 0):
+        raise _bad(ckpt, f"its wall time is {seconds!r}")
+    envs = meta.get("envs")
+    if not (isinstance(envs, list) and len(envs) == config.envs):
+        raise _bad(ckpt, "it holds another number of environments")
+    try:
+        tensors = torch.load(state, weights_only=True, map_location="cpu")
+    except Exception as exc:  # torch raises many kinds for a file that is not one
+        raise _bad(ckpt, f"last.pt cannot be read: {type(exc).__name__}") from None
+    need = {"params", "torch_rng", "last_obs", "episode_starts",
+            *(f"actions{i}" for i in range(config.envs))}  # fmt: skip
+    if not isinstance(tensors, dict) or not need <= set(tensors):
+        raise _bad(ckpt, "last.pt lacks parts of a checkpoint")
+    def finite(value: Any, name: str) -> None:
+        if isinstance(value, dict):
+            for k, v in value.items():
+                finite(v, f"{name}.{k}")
+        elif isinstance(value, list | tuple):
+            for k, v in enumerate(value):
+                finite(v, f"{name}[{k}]")
+        elif isinstance(value, torch.Tensor) and value.is_floating_point() and \
+                not bool(torch.isfinite(value).all()):  # fmt: skip
+            raise _bad(ckpt, f"{name} holds NaN or infinity")
+
+    finite(tensors, "last.pt")
+    return {"meta": meta, "tensors": tensors}
+
+
+def _restore(model: Any, vec: Any, saved: dict[str, Any]) -> float:
+    """The model, the random generators and the environments as ``saved``; returns the
+    wall time already spent."""
+    import random
+
+    import torch
+
+    meta, tensors, ckpt = saved["meta"], saved["tensors"], "the checkpoint"
+    try:
+        model.set_parameters(tensors["params"], exact_match=True)
+        obs = np.stack([
+            env.restore({"drawn_from": meta["envs"][i]["drawn_from"],
+                         "actions": tensors[f"actions{i}"].numpy(),
+                         "ended": meta["envs"][i].get("ended")})
+            for i, env in enumerate(vec.envs)
+        ])  # fmt: skip
+        kind, key, pos, has_gauss, cached = meta["numpy_rng"]
+        np.random.set_state((kind, np.asarray(key, dtype=np.uint32), pos, has_gauss, cached))
+        version, inner, gauss = meta["python_rng"]
+        random.setstate((version, tuple(inner), gauss))
+        torch.set_rng_state(tensors["torch_rng"])
+    except Exception as exc:  # a part of another shape or kind than the run's
+        first = " ".join(str(exc).split())[:160]
+        raise InvalidArgumentError(f"{ckpt} does not fit this run ({type(exc).__name__}: "
+                                   f"{first}); use another --checkpoints directory") from None
+    model._last_obs = tensors["last_obs"].numpy().copy()
+    if not np.array_equal(obs, model._last_obs):
+        raise InvalidArgumentError(f"{ckpt}: its environments do not replay to the state it "
+                                   "recorded; use another --checkpoints directory")  # fmt: skip
+    model._last_episode_starts = tensors["episode_starts"].numpy().astype(bool)
+    model.num_timesteps = int(meta["steps"])
+    model._n_updates = int(meta.get("updates", 0))
+    return float(meta["seconds"])

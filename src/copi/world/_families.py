@@ -14,7 +14,7 @@ from shapely.geometry import LineString
 from copi._plugins import Registry, origin_of
 from copi._rng import Seed, as_generator
 from copi._validation import as_vector
-from copi.errors import InvalidArgumentError
+from copi.errors import CopiError, InvalidArgumentError
 from copi.world._family_indoor import indoor_world
 from copi.world._family_maps import MapsParams, map_window_world, maps_identity
 from copi.world._family_polygon import polygon_world
@@ -216,7 +216,14 @@ def sample_world(
     if family == "maps" and data_dir is not None:
         params = MapsParams(data_dir=os.fspath(data_dir))
         return map_window_world(rng, params=params, name=name)
-    world = spec.sampler(rng, name=name)
+    try:
+        world = spec.sampler(rng, name=name)
+    except (KeyboardInterrupt, CopiError):
+        raise
+    except BaseException as exc:  # another package's sampler: its error, named as such
+        did = f"called sys.exit({exc.code!r})" if isinstance(exc, SystemExit) else (
+            f"raised {type(exc).__name__}" + (f": {exc}" if str(exc) else ""))  # fmt: skip
+        raise InvalidArgumentError(f"the sampler of family {family!r} {did}") from None
     if not isinstance(world, World):
         raise InvalidArgumentError(
             f"the sampler of family {family!r} returned a {type(world).__name__}, not a World"

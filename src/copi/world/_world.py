@@ -195,12 +195,6 @@ class World:
             )
         with _at("boundary"):
             boundary = _simple_ring(self.boundary, "boundary")
-        big = float(np.abs(boundary).max())
-        if big > MAX_COORDINATE:
-            raise InvalidWorldError(
-                f"coordinates must be within +-{MAX_COORDINATE:,.0f} agent steps; the "
-                f"boundary reaches {big:.3g}", where=("boundary",),
-            )
         if isinstance(self.holes, np.ndarray) and self.holes.ndim == 2:
             raise InvalidWorldError(
                 "holes must be a list of polygons (each a list of [x, y]); got one polygon",
@@ -382,6 +376,12 @@ class World:
 def _simple_ring(coords: Any, name: str) -> FloatArray:
     """The ring as given (vertex numbers in messages are the user's), checked simple."""
     ring = as_ring(coords, name)
+    big = float(np.abs(ring).max())
+    if big > MAX_COORDINATE:
+        raise InvalidWorldError(
+            f"coordinates must be within +-{MAX_COORDINATE:,.0f} agent steps; the {name} "
+            f"reaches {big:.3g}"
+        )
     v = ring - ring[0]
     d = v[int(np.argmax(np.hypot(v[:, 0], v[:, 1])))]
     if np.all(np.abs(v[:, 0] * d[1] - v[:, 1] * d[0]) <= 1e-12 * float(d @ d)):

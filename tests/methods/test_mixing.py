@@ -55,8 +55,14 @@ def test_a_method_registered_over_copi_s_own_never_resumes_its_run(
         assert "run of method 'dwa' from copi's own there, from tests.methods.test_mixing " \
                "now" in msg  # fmt: skip
         assert store.read_bytes() == before and _rows(store) == 3
-        monkeypatch.setenv("COLUMNS", "400")  # one table row a line
-        code, text, _ = run(["list"], capsys)  # the impostor is shown as what it is
+        from copi.cli._common import out
+
+        wide = out._width  # one table row a line
+        out.width = 400
+        try:
+            code, text, _ = run(["list"], capsys)  # the impostor is shown as what it is
+        finally:
+            out._width = wide
         flat = " ".join(text.split())
         assert code == 0 and "an impostor [/x] [from tests.methods.test_mixing;" in flat
         assert "registered over copi's own]" in flat

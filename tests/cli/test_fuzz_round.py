@@ -203,3 +203,28 @@ def test_rows_of_fewer_episodes_say_so_in_the_overview(
     row = next(ln for ln in overview.splitlines() if ln.startswith("| **straight** | map |"))
     assert "n = 2" in row
     assert "n = " not in next(ln for ln in overview.splitlines() if ln.startswith("| dwa | map |"))
+
+
+def test_a_scheduler_that_never_answers_is_given_up_on_in_seconds(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A server of another kind accepts the connection and then says nothing."""
+    import socket
+    import threading
+    import time
+
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen()
+    held: list[socket.socket] = []
+    threading.Thread(target=lambda: held.append(server.accept()[0]), daemon=True).start()
+    port = server.getsockname()[1]
+    t0 = time.monotonic()
+    msg = _one_line_error(*run(["benchmark", "-o", str(tmp_path / "b"), "--methods", "dwa@map",
+                                "--families", "star", "--episodes", "2", "--scheduler",
+                                f"tcp://127.0.0.1:{port}"], capsys)[::2])  # fmt: skip
+    for conn in held:
+        conn.close()
+    server.close()
+    assert time.monotonic() - t0 < 10 and "none answered within 8 s" in msg
+    assert not (tmp_path / "b" / "benchmark.sqlite").exists()

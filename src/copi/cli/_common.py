@@ -172,7 +172,7 @@ def progress() -> Progress | PlainProgress:
             seconds = 10.0
         return PlainProgress(every=seconds)
     return Progress(
-        TextColumn("{task.description}"),
+        TextColumn("{task.description}", markup=False),
         BarColumn(),
         MofNCompleteColumn(),
         TimeElapsedColumn(),

@@ -173,7 +173,7 @@ def benchmark_command(
     ] = None,
     methods: Annotated[
         str | None,
-        typer.Option("--methods", help="Comma-separated arms NAME[@LEVEL][:STRATEGY] "
+        typer.Option("--methods", help="Comma-separated arms NAME\\[@LEVEL]\\[:STRATEGY] "
                      "(e.g. dwa@sensor:mapping); 'ablations' for the learnt preset's."),
     ] = None,
     against: Annotated[
@@ -332,7 +332,7 @@ def lifelong_command(
     tasks: Annotated[int, typer.Option("--tasks", min=1, help="Tasks in each life.")] = 50,
     methods: Annotated[
         str | None,
-        typer.Option("--methods", help="Comma-separated arms NAME[@LEVEL][:STRATEGY] "
+        typer.Option("--methods", help="Comma-separated arms NAME\\[@LEVEL]\\[:STRATEGY] "
                      "(default: all six; a name alone: at sensor, causal for copi's modes, "
                      "mapping for the others)."),
     ] = None,

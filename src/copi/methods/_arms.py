@@ -72,8 +72,13 @@ def parse_methods(
         raise InvalidArgumentError("methods must name at least one method; got none")
     out: list[MethodRun] = []
     for item in items:
-        head, _, strat = item.partition(":")
-        name, _, level = head.partition("@")
+        head, colon, strat = item.partition(":")
+        name, at, level = head.partition("@")
+        if (at and not level) or (colon and not strat):
+            raise InvalidArgumentError(
+                f"{item}: name a level after @ ({', '.join(SENSING_LEVELS)}) and a strategy "
+                "after : (greedy, mapping, causal), as in dwa@sensor:mapping"
+            )
         spec = method_spec(name)
         levels = [level] if level else list(spec.levels)
         if strat:
@@ -83,7 +88,7 @@ def parse_methods(
             if lv != "sensor" and strat:
                 raise InvalidArgumentError(
                     f"{item}: a global strategy is chosen at level sensor only (at {lv} the "
-                    "method follows the route)"
+                    f"method follows the route): write {name}@sensor:{strat}"
                 )
             run = MethodRun(name, lv, (strat or strategy) if lv == "sensor" else "route")  # type: ignore[arg-type]
             if run not in out:

@@ -38,6 +38,39 @@ class InlineExecutor(Executor):
         return fut
 
 
+HANDSHAKE_SECONDS = 8.0
+"""How long a Dask scheduler has to answer (a server of another kind at the address may
+accept the connection and then say nothing, forever)."""
+
+
+def _connect(client_class: Any, scheduler: str) -> Any:
+    """A ``distributed.Client`` of ``scheduler``, or one clear error within
+    :data:`HANDSHAKE_SECONDS`: the handshake runs in a daemon thread, abandoned if it
+    does not end."""
+    box: dict[str, Any] = {}
+
+    def connect() -> None:
+        try:
+            box["client"] = client_class(scheduler, timeout=f"{HANDSHAKE_SECONDS:g}s")
+        except BaseException as exc:  # reported below, in the caller's thread
+            box["error"] = exc
+
+    thread = threading.Thread(target=connect, name="copi-dask-connect", daemon=True)
+    thread.start()
+    thread.join(HANDSHAKE_SECONDS)
+    if thread.is_alive():
+        raise ExecutorError(
+            f"cannot reach the Dask scheduler at {scheduler}: none answered within "
+            f"{HANDSHAKE_SECONDS:g} s (nothing listens there, or something else does)"
+        )
+    if "error" in box:
+        exc = box["error"]
+        if isinstance(exc, OSError | TimeoutError | ValueError):
+            raise ExecutorError(f"cannot reach the Dask scheduler at {scheduler}: {exc}")
+        raise exc
+    return box["client"]
+
+
 @contextmanager
 def make_executor(workers: int = 1, scheduler: str | None = None) -> Iterator[Executor]:
     """An executor for ``workers`` local processes, or the Dask cluster at ``scheduler``
@@ -47,10 +80,7 @@ def make_executor(workers: int = 1, scheduler: str | None = None) -> Iterator[Ex
             from distributed import Client
         except ImportError:  # pragma: no cover - distributed is a dependency
             raise ExecutorError("--scheduler needs the 'distributed' package") from None
-        try:
-            client = Client(scheduler, timeout="10s")
-        except (OSError, TimeoutError, ValueError) as exc:
-            raise ExecutorError(f"cannot reach the Dask scheduler at {scheduler}: {exc}") from None
+        client = _connect(Client, scheduler)
         try:
             yield client.get_executor()
         finally:

@@ -7,14 +7,15 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable, Iterator
-from concurrent.futures import as_completed
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures.process import BrokenProcessPool
 from contextlib import AbstractContextManager, contextmanager
 from dataclasses import dataclass
 from typing import Any
 
 from copi.errors import Interrupted
 from copi.results import ResultsStore
-from copi.runs._executor import InlineExecutor, make_executor
+from copi.runs._executor import ExecutorError, InlineExecutor, make_executor
 from copi.runs._inputs import run_id
 
 __all__ = [
@@ -46,19 +47,27 @@ def stops_cleanly(
     call as a SystemError), into :class:`copi.errors.Interrupted` saying what is saved:
     ``saved()`` counts it in the store (a Ctrl-C may land between a row's commit and
     the tally), else the tally."""
+    def stored() -> int:
+        if saved is not None:
+            try:
+                return saved()
+            except Exception:  # the count is a courtesy; the message must get out
+                pass
+        return tally.finished
+
     try:
         yield
+    except BrokenProcessPool:
+        raise ExecutorError(
+            f"a worker process died (killed, or out of memory): {stored()}/{tally.total} "
+            f"{unit} saved in {output}; rerun the same command to resume"
+        ) from None
     except (KeyboardInterrupt, SystemError) as exc:
         if isinstance(exc, SystemError) and not _from_ctrl_c(exc):
             raise
-        done = tally.finished
-        if saved is not None:
-            try:
-                done = saved()
-            except Exception:  # the count is a courtesy; the message must get out
-                pass
         raise Interrupted(
-            f"{done}/{tally.total} {unit} saved in {output}; rerun the same command to resume"
+            f"{stored()}/{tally.total} {unit} saved in {output}; rerun the same command to "
+            "resume"
         ) from None
 
 
@@ -86,22 +95,23 @@ def execute(
     one: Callable[[Any, Any], list[Any]],
     many: Callable[[Any, list[Any]], list[Any]],
     commit: Callable[[list[Any]], None],
+    pool: Any,
     workers: int,
-    scheduler: str | None,
     chunk: int,
     stopping: AbstractContextManager[Any],
 ) -> None:
-    """Run every item and hand its results to ``commit`` as they come back: in this
-    process one item at a time (``one(config, item)``), or on a local pool or a Dask
-    cluster in chunks of at most ``chunk`` (``many(config, items)``, which must pickle).
-    On any exception the chunks not started are cancelled; ``stopping`` wraps the whole
-    (e.g. the one-line Ctrl-C message)."""
-    with stopping, make_executor(workers, scheduler) as pool:
+    """Run every item on ``pool`` (:func:`~copi.runs.make_executor`'s) and hand its
+    results to ``commit`` as they come back: in this process one item at a time
+    (``one(config, item)``), or on a local pool or a Dask cluster in chunks of at most
+    ``chunk`` (``many(config, items)``, which must pickle). On any exception the chunks
+    not started are cancelled; ``stopping`` wraps the whole (e.g. the one-line Ctrl-C
+    message)."""
+    with stopping:
         if isinstance(pool, InlineExecutor):
             for item in items:
                 commit(one(config, item))
             return
-        n_workers = workers if scheduler is None else 4
+        n_workers = workers if isinstance(pool, ProcessPoolExecutor) else 4
         size = max(1, min(chunk, len(items) // (4 * n_workers)))
         futures = [
             pool.submit(many, config, items[i : i + size]) for i in range(0, len(items), size)
@@ -157,8 +167,9 @@ def run_series(
     ``output``, run every item some series still misses (``work``, in this process or on
     a pool or Dask cluster, which must pickle it), and commit each result as it comes
     back, so that an interrupted run resumes where it stopped. ``progress(done, total)``
-    counts (series, item) pairs; ``unit`` names them in the Ctrl-C message."""
-    with ResultsStore(output) as store:
+    counts (series, item) pairs; ``unit`` names them in the Ctrl-C message. The executor
+    comes first: a scheduler that cannot be reached leaves no file behind."""
+    with make_executor(workers, scheduler) as pool, ResultsStore(output) as store:
         missing: dict[tuple[Any, int], list[Series]] = {}
         total = 0
         for s in series:
@@ -193,7 +204,7 @@ def run_series(
 
         execute(
             config, items, one=lambda c, item: work(c, *item), many=_many(work),
-            commit=commit, workers=workers, scheduler=scheduler, chunk=chunk,
+            commit=commit, pool=pool, workers=workers, chunk=chunk,
             stopping=stops_cleanly(tally, output, unit, saved),
         )  # fmt: skip
 

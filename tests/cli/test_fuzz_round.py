@@ -228,3 +228,92 @@ def test_a_scheduler_that_never_answers_is_given_up_on_in_seconds(
     server.close()
     assert time.monotonic() - t0 < 10 and "none answered within 8 s" in msg
     assert not (tmp_path / "b" / "benchmark.sqlite").exists()
+
+
+def _tampered(src: Path, dst: Path, change: object) -> Path:
+    from copi._files import write_npz
+
+    with np.load(src, allow_pickle=False) as z:
+        arrays = {k: z[k] for k in z.files}
+    meta = json.loads(str(arrays["metadata"][()]))
+    change(arrays, meta)  # type: ignore[operator]
+    arrays["metadata"] = np.array(json.dumps(meta))
+    return write_npz(dst, arrays)
+
+
+def _no_templates(a: dict, m: dict) -> None:
+    a["red_templates"] = a["red_templates"][:0]
+
+
+def _long_family(a: dict, m: dict) -> None:
+    m["params"]["family"] = "s" * 100_000
+
+
+def _zero_directions(a: dict, m: dict) -> None:
+    a["pol_directions"] = np.zeros_like(a["pol_directions"])
+
+
+def _huge_directions(a: dict, m: dict) -> None:
+    a["pol_directions"] = a["pol_directions"] * 1e300
+
+
+@pytest.mark.parametrize(("change", "message"), [
+    (_no_templates, "no template"),
+    (_long_family, "hold text longer than 200 characters"),
+    (_zero_directions, "policy directions are not unit vectors"),
+    (_huge_directions, "policy directions are not unit vectors"),
+])  # fmt: skip
+def test_tampered_capabilities_are_refused(
+    change: object, message: str, faithful_caps: Path, tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:  # fmt: skip
+    bad = _tampered(faithful_caps, tmp_path / "bad.npz", change)
+    msg = _one_line_error(*run(["inspect", str(bad)], capsys)[::2])
+    assert message in msg
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["learn", "-o", "x.npz", "--worlds", "1000000000"], "worlds must be at most 100,000"),
+    (["learn", "-o", "x.npz", "--probe-worlds", "1000000000"], "probe_worlds must be at most"),
+    (["learn", "-o", "x.npz", "--epochs", "1000000000"], "epochs must be at most 1,000"),
+    (["learn", "-o", "x.npz", "--probe-steps", "1000000000000"], "probe_steps must be at most"),
+    (["world", "sample", "-n", "1000000000", "-o", "w.json"], "--count must be at most 20,000"),
+    (["watch", "--method", "dwa", "--family", "star", "--episode", "0", "--size", "4096",
+      "--max-steps", "400", "-o", "w.gif"], "401 frames would hold 18.8 GB in memory"),
+    (["benchmark", "-o", "b", "--methods", "dwa@"], "dwa@: name a level after @"),
+    (["benchmark", "-o", "b", "--methods", "dwa:mapping"], "write dwa@sensor:mapping"),
+])  # fmt: skip
+def test_a_typo_is_not_a_day_of_work(
+    args: list[str], message: str, tmp_path: Path, capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:  # fmt: skip
+    monkeypatch.chdir(tmp_path)
+    msg = _one_line_error(*run(args, capsys)[::2])
+    assert message in msg and list(tmp_path.iterdir()) == []
+
+
+class _Suicide(Agent):
+    """A method whose process dies (as a worker killed by the system would)."""
+
+    def reset(self, task: object) -> None:
+        pass
+
+    def act(self, obs: object) -> np.ndarray:
+        import signal
+
+        os.kill(os.getpid(), signal.SIGKILL)
+        return np.zeros(2)
+
+
+def test_a_worker_that_dies_is_one_line_and_the_run_resumes(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    register_method("dies", _Suicide, summary="kills its own process")
+    try:  # forked workers inherit the registration; the parent stays alive
+        msg = _one_line_error(*run(["benchmark", "-o", str(tmp_path), "--methods",
+                                    "dies@sensor,dwa@map", "--families", "star",
+                                    "--episodes", "8", "--workers", "2"], capsys)[::2])  # fmt: skip
+        assert "a worker process died (killed, or out of memory)" in msg
+        assert "saved in" in msg and "rerun the same command to resume" in msg
+    finally:
+        unregister_method("dies")

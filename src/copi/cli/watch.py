@@ -60,11 +60,13 @@ def watch_command(
     from copi.errors import InvalidArgumentError
     from copi.learning import Capabilities
     from copi.methods import resolve
-    from copi.reports import FORMATS, save_watch, watch_episode
+    from copi.reports import FORMATS, check_frames, save_watch, watch_episode
     from copi.world import check_family, load_worlds
 
     if output.suffix.lower() not in FORMATS:
         raise InvalidArgumentError(f"-o must end in {', '.join(FORMATS)}; got {output.name!r}")
+    if output.suffix.lower() != ".png":
+        check_frames(size, max_steps + 1)  # before the episode runs
     check_outputs(
         {"the animation": (output, output.suffix.lower().lstrip("."))},
         inputs=[capabilities, world_file],

@@ -25,13 +25,15 @@ def world_sample(
     World k is drawn from numpy's default_rng(\\[seed, k]).
     """
     # "\[": help text is Rich markup, which would take "[seed, k]" for a style tag
-    from copi.world import random_world, save_worlds
+    from copi._validation import check_count
+    from copi.world import MAX_WORLDS, random_world, save_worlds
 
+    check_count(count, "--count", MAX_WORLDS)  # what a world file may hold
+    check_outputs({"the world file": (output, "json")})
     worlds = []
     for k in range(count):
         w = random_world(np.random.default_rng([seed, k]))
         worlds.append(w.replace(name=f"{k:03d}-{len(w.boundary)}gon"))
-    check_outputs({"the world file": (output, "json")})
     output.parent.mkdir(parents=True, exist_ok=True)
     save_worlds(worlds, output)
     table = Table("world", "sides", "area", "width", "height", title=str(output))

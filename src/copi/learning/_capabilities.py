@@ -385,7 +385,15 @@ def _check_consistent(p: Path, c: Capabilities) -> None:
         problems.append("reduction refers to missing group elements")
     if T and (c.reduction.templates.min() < 0 or c.reduction.templates.max() >= L):
         problems.append("templates refer to missing landmarks")
+    if T < 1:
+        problems.append("no template: the reduction holds none")
+    if D not in (4, 8, 16):
+        problems.append(f"{D} policy directions; capabilities have 4, 8 or 16")
     pol = c.policies
+    norms = np.hypot(pol.directions[:, 0], pol.directions[:, 1]) if pol.directions.ndim == 2 \
+        and pol.directions.shape[-1] == 2 else np.zeros(0)  # fmt: skip
+    if norms.size and not np.allclose(norms, 1.0, atol=1e-6):
+        problems.append("policy directions are not unit vectors")
     if (
         pol.passable.shape != (T, D)
         or pol.actions.shape != (T, D, 2)
@@ -411,6 +419,10 @@ def _without_timings(stats: dict[str, Any]) -> dict[str, Any]:
             for st in out["stages"]
         ]
     return out
+
+
+MAX_TEXT = 200
+"""Longest text a capabilities file's parameter may hold (a family's name, a label)."""
 
 
 def _check_arrays(p: Path, meta: dict[str, Any], a: dict[str, NDArray[Any]]) -> None:
@@ -443,6 +455,12 @@ def _check_arrays(p: Path, meta: dict[str, Any], a: dict[str, NDArray[Any]]) -> 
         if not ok:
             raise CapabilitiesFormatError(f"{p}: member {name!r} holds NaN or infinite values")
     params, stats = meta.get("params", {}), meta.get("stats", {})
+    long = sorted(k for k, v in params.items() if isinstance(v, str) and len(v) > MAX_TEXT)
+    if long:
+        raise CapabilitiesFormatError(
+            f"{p}: parameters {long} hold text longer than {MAX_TEXT} characters (names of "
+            "families, learners, labels)"
+        )
     for key, top in (("max_range", MAX_RANGE), ("agent_radius", MAX_RADIUS)):
         v = params.get(key)
         if v is not None and not (_number(v) and math.isfinite(v) and 0 < v <= top):

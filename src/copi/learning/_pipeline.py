@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from copi._validation import positive_int
+from copi._validation import check_count, positive_int
 from copi.errors import InvalidArgumentError
 from copi.learning._capabilities import Capabilities
 from copi.learning._contexts import (
@@ -29,6 +29,17 @@ from copi.learning._symmetry import SymmetryGroup, reduce_landmarks, ring_operat
 from copi.world import RangeSensor, check_family
 
 __all__ = ["LearnParams", "learn", "simulated_steps"]
+
+
+MOST = {"worlds": 100_000, "steps": 100_000, "workers": 512, "n_rays": 4096,
+        "epochs": 1_000, "probe_worlds": 100_000, "probe_steps": 100_000,
+        "probe_horizon": 1_000}  # fmt: skip
+"""The largest value of each count of :class:`LearnParams` (the paper's 100 worlds of 300
+steps, 20 passes; a count beyond these is a typing error, refused before any work)."""
+MOST_READINGS = 10_000_000
+"""Most readings an exploration may gather (worlds x steps; 1.3 GB of float32 ranges)."""
+MOST_PROBED = 2_000_000
+"""Most states the probing walks may visit (probe_worlds x probe_steps)."""
 
 
 @dataclass(frozen=True)
@@ -109,6 +120,15 @@ class LearnParams:
         for name in ("worlds", "steps", "workers", "n_rays", "epochs", "probe_worlds",
                      "probe_steps", "probe_horizon"):  # fmt: skip
             positive_int(getattr(self, name), name)
+            check_count(int(getattr(self, name)), name, MOST[name])
+        for a, b, most in (("worlds", "steps", MOST_READINGS),
+                           ("probe_worlds", "probe_steps", MOST_PROBED)):  # fmt: skip
+            n = int(getattr(self, a)) * int(getattr(self, b))
+            if n > most:
+                raise InvalidArgumentError(
+                    f"{a} x {b} must be at most {most:,} (the readings it keeps in memory); "
+                    f"got {n:,}"
+                )
         check_family(self.family)
         if int(self.skeleton_bootstrap) != self.skeleton_bootstrap or self.skeleton_bootstrap < 0:
             raise InvalidArgumentError(

@@ -17,7 +17,14 @@ from copi.reports._figures import (
 )
 from copi.reports._lifelong import lifelong_blocks, lifelong_report_paths, write_lifelong_report
 from copi.reports._navigation import Report, summarize, summarize_games, warnings_for, write_report
-from copi.reports._watch import FORMATS, Step, WatchedEpisode, save_watch, watch_episode
+from copi.reports._watch import (
+    FORMATS,
+    Step,
+    WatchedEpisode,
+    check_frames,
+    save_watch,
+    watch_episode,
+)
 
 __all__ = [
     "DEFAULT_AGAINST",
@@ -25,6 +32,7 @@ __all__ = [
     "Report",
     "Step",
     "WatchedEpisode",
+    "check_frames",
     "fig2_operators",
     "finish_figure",
     "lifelong_blocks",

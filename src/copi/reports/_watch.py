@@ -33,7 +33,7 @@ from copi.online import CopiAgent, LearntAgent
 from copi.runs import EpisodeOutcome, draw_episode, run_episode
 from copi.world import Simulator, rasterize
 
-__all__ = ["FORMATS", "Step", "WatchedEpisode", "save_watch", "watch_episode"]
+__all__ = ["FORMATS", "Step", "WatchedEpisode", "check_frames", "save_watch", "watch_episode"]
 
 OUTCOME_COLORS = {"success": "#2ca02c", "collision": "#d62728", "timeout": "#666666"}
 
@@ -322,6 +322,23 @@ def _fit(text: str, font: Any, width: int) -> str:
     return text + "..."
 
 
+MOST_FRAME_BYTES = 2 << 30
+"""Most bytes an animation's frames may hold in memory (size x size x 3 a frame)."""
+
+
+def check_frames(size: int, frames: int) -> None:
+    """Refuse an animation whose frames would not fit :data:`MOST_FRAME_BYTES`, saying
+    how many steps fit at this size."""
+    need = size * size * 3 * frames
+    if need > MOST_FRAME_BYTES:
+        fit = MOST_FRAME_BYTES // (size * size * 3)
+        raise InvalidArgumentError(
+            f"at {size} pixels, {frames:,} frames would hold {need / 2**30:.1f} GB in memory, "
+            f"more than {MOST_FRAME_BYTES / 2**30:.0f} GB: lower the size, or the steps (at "
+            f"most {fit:,} frames at this size)"
+        )
+
+
 def save_watch(
     watched: WatchedEpisode,
     path: str | os.PathLike[str],
@@ -341,6 +358,7 @@ def save_watch(
         raise InvalidArgumentError("writing .mp4 needs ffmpeg on the PATH; write a .gif instead")
     if fps < 1:
         raise InvalidArgumentError(f"fps must be >= 1; got {fps}")
+    check_frames(size, len(watched.sim.path))
     if suffix == ".png":
         sim = watched.sim
         img = _frame(watched, len(sim.path) - 1, np.asarray(sim.path), np.asarray(sim.traces),

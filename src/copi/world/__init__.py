@@ -44,7 +44,7 @@ from copi.world._generate import (
     random_world,
     sample_start_goal,
 )
-from copi.world._io import load_worlds, save_worlds
+from copi.world._io import MAX_WORLDS, load_worlds, save_worlds
 from copi.world._render import draw_simulator, draw_world, rasterize, render_rgb
 from copi.world._sensor import RangeSensor
 from copi.world._simulator import Simulator, StepResult
@@ -56,6 +56,7 @@ __all__ = [
     "FAMILIES",
     "FamilySpec",
     "IndoorParams",
+    "MAX_WORLDS",
     "MOVINGAI_ENV",
     "MapsParams",
     "ObstacleSpec",

@@ -309,3 +309,23 @@ def test_saved_maps_identify_a_run_whatever_its_worlds(learnt: str, tmp_path: Pa
     with pytest.raises(ValueError, match="--maps and --from-maps are both"):
         LifelongConfig(learnt, worlds=1, tasks=1, methods=("copi-learnt@sensor:causal",),
                        from_maps=str(maps), maps=str(maps)).resolved()  # fmt: skip
+
+
+def test_goals_set_rates_side_by_side_only_over_the_lives_both_ran(
+    learnt: str, tmp_path: Path
+) -> None:
+    from copi.reports import write_lifelong_report
+    from copi.reports._lifelong import CAUSAL
+
+    out = tmp_path / "s.sqlite"
+    run_lifelong(LifelongConfig(learnt, worlds=2, tasks=5, methods=(CAUSAL,)), out, workers=1)
+    run_lifelong(LifelongConfig(learnt, worlds=1, tasks=5, methods=("copi-learnt@map",)), out,
+                 workers=1)  # fmt: skip
+    rows = _rows(out)
+    on_life_0 = [r for r in rows if r["life"] == 0 and r["task"] == 4]
+    assert len(on_life_0) == 2  # both ran life 0's last task
+    text = write_lifelong_report(out, tmp_path / "s.md").read_text()
+    (goal,) = [ln for ln in text.splitlines() if "vs the learnt preset" in ln]
+    assert "(on the 1 lives both ran)" in goal, goal
+    causal = next(r for r in on_life_0 if r["strategy"] == "causal")
+    assert f"late success {100.0 * (causal['outcome'] == 'success'):.1f} vs" in goal, goal

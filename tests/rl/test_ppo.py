@@ -185,6 +185,8 @@ def test_bad_policy_files_are_refused_in_one_line(
         (["--task", "fly"], "task must be navigation or chauffeur"),
         (["--net", "64,x"], "--net must be comma-separated ints"),
         (["--levels", "oracle"], "a local policy runs at sensor or map"),
+        (["--seed", str(2**32)], "seed must be an int in 0 .. 4,294,967,295"),
+        (["--net", ",".join(["8"] * 8)], "net must be 1 to 7 layer widths"),
     ],
 )
 def test_bad_training_options_are_one_line(args: list[str], message: str, tmp_path: Path,

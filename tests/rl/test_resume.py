@@ -52,8 +52,26 @@ def test_a_resumed_run_gives_the_weights_of_an_uninterrupted_one(tmp_path: Path)
     assert not (tmp_path / "cut.npz").exists()
     saved = json.loads((tmp_path / "ck" / "last.json").read_text())["steps"]
     assert 0 < saved < 1536
-    _train(tmp_path / "cut.npz", tmp_path / "ck")  # the same command again
+    counts: list[tuple[int, int]] = []
+    resumed: list[int] = []
+    _train(tmp_path / "cut.npz", tmp_path / "ck", progress=lambda d, t: counts.append((d, t)),
+           resumed=resumed.append)  # the same command again  # fmt: skip
     assert _digest(tmp_path / "cut.npz") == _digest(tmp_path / "whole.npz")
+    assert resumed == [saved] and counts[0] == (saved, 1536) and counts[-1] == (1536, 1536)
+
+
+def test_progress_counts_the_whole_rollouts_a_run_takes(tmp_path: Path) -> None:
+    pytest.importorskip("torch")
+    pytest.importorskip("stable_baselines3")
+    from copi.rl import train
+
+    cfg = _config(steps=500)  # rollouts of 3 x 128: 768 steps
+    assert cfg.planned_steps == 768
+    counts: list[tuple[int, int]] = []
+    summary = train(cfg, tmp_path / "p.npz", validate_every=10_000, validation_episodes=1,
+                    progress=lambda d, t: counts.append((d, t)))  # fmt: skip
+    assert summary["steps"] == 768 and {t for _, t in counts} == {768}
+    assert max(d for d, _ in counts) == 768
 
 
 @pytest.fixture(scope="module")

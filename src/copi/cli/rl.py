@@ -73,10 +73,16 @@ def train_command(
     if checkpoints is not None:
         check_writable(checkpoints, "checkpoints")
     command = "copi " + " ".join(shlex.quote(a) for a in sys.argv[1:])
+    if config.planned_steps != steps:
+        out.print(f"training {config.planned_steps:,} steps: PPO trains in whole rollouts of "
+                  f"{config.envs} envs x {config.n_steps} steps (asked for {steps:,})")
     with progress() as bar:
-        tid = bar.add_task("rl: environment steps", total=steps)
+        tid = bar.add_task("rl: environment steps", total=config.planned_steps)
         summary = train(config, output, checkpoints=checkpoints, validate_every=validate_every,
                         progress=lambda done, total: bar.update(tid, completed=done),
+                        resumed=lambda done: out.print(
+                            f"resuming at {done:,} of {config.planned_steps:,} steps from "
+                            f"{checkpoints}"),
                         command=command)  # fmt: skip
     last = summary["curve"][-1]
     out.print(

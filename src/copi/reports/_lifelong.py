@@ -248,13 +248,12 @@ def _goals(
             f"- {CAUSAL}: median excess late {_pct(c['excess_late'])} vs early "
             f"{_pct(c['excess_early'])} (goal: at most half): {verdict(half)}."
         )
-        at_map = s.get("copi-learnt@map")
-        if at_map is not None:
-            ok = c["success_late"] >= at_map["success_late"]
+        if "copi-learnt@map" in by_method:
+            a, b, on = _late_on_common_lives(by_method[CAUSAL], by_method["copi-learnt@map"],
+                                             late)  # fmt: skip
             out.append(
-                f"- {CAUSAL} late success {_pct(c['success_late'])} vs the learnt preset at "
-                f"the map level {_pct(at_map['success_late'])} (goal: at least as high): "
-                f"{verdict(ok)}."
+                f"- {CAUSAL} late success {_pct(a)} vs the learnt preset at the map level "
+                f"{_pct(b)}{on} (goal: at least as high): {verdict(a >= b)}."
             )
         ref = _by_life(by_method[CAUSAL], late)
         beaten = []
@@ -279,11 +278,22 @@ def _goals(
         out.append("- continual growth: no unfamiliar readings early in life, nothing to lower.")
     elif g is not None and c is not None:
         halved = g["unfamiliar_late"] <= 0.5 * g["unfamiliar_early"]
-        kept = g["success_late"] >= c["success_late"]
+        a, b, on = _late_on_common_lives(by_method[CONTINUAL], by_method[CAUSAL], late)
         out.append(
             f"- continual growth: unfamiliar {_pct(g['unfamiliar_early'])} → "
             f"{_pct(g['unfamiliar_late'])} (goal: at least halved): {verdict(halved)}; late "
-            f"success {_pct(g['success_late'])} vs {_pct(c['success_late'])} without growth "
-            f"(goal: not lower): {verdict(kept)}."
+            f"success {_pct(a)} vs {_pct(b)} without growth{on} (goal: not lower): "
+            f"{verdict(a >= b)}."
         )
     return out
+
+
+def _late_on_common_lives(a: list[Any], b: list[Any], late: range) -> tuple[float, float, str]:
+    """Late success of two methods over the lives both ran (a rate over 4 lives is not set
+    against one over 1), and the words saying so when either ran others too."""
+    common = {int(r["life"]) for r in a} & {int(r["life"]) for r in b}
+    rate = [statistic([r for r in rows if r["task"] in late and int(r["life"]) in common],
+                      "success") for rows in (a, b)]  # fmt: skip
+    every = {int(r["life"]) for r in a} | {int(r["life"]) for r in b}
+    on = "" if common == every else f" (on the {len(common)} lives both ran)"
+    return rate[0], rate[1], on

@@ -65,6 +65,9 @@ def _need_rl() -> None:
         )
 
 
+MAX_SEED = 2**32 - 1
+
+
 @dataclass(frozen=True)
 class TrainConfig:
     """One training run; every field decides the policy it learns."""
@@ -106,6 +109,10 @@ class TrainConfig:
             v = getattr(self, key)
             if isinstance(v, bool) or int(v) != v or v < 1:
                 raise InvalidArgumentError(f"{key} must be a positive int; got {v!r}")
+        if isinstance(self.seed, bool) or not (isinstance(self.seed, int)
+                                               and 0 <= self.seed <= MAX_SEED):
+            raise InvalidArgumentError(f"seed must be an int in 0 .. {MAX_SEED:,} (the range "
+                                       f"of the generators PPO seeds); got {self.seed!r}")
         if self.steps > 10**9:
             raise InvalidArgumentError(f"steps must be at most 1,000,000,000; got {self.steps:,}")
         if not 1 <= self.envs <= 256:
@@ -126,6 +133,16 @@ class TrainConfig:
         if not self.families or not self.levels:
             raise InvalidArgumentError("families and levels must each name at least one; got "
                                        f"families {self.families!r}, levels {self.levels!r}")
+
+    @property
+    def rollout(self) -> int:
+        """Environment steps between two updates: PPO trains in whole rollouts."""
+        return self.envs * self.n_steps
+
+    @property
+    def planned_steps(self) -> int:
+        """The steps a run takes: ``steps`` rounded up to whole rollouts."""
+        return -(-self.steps // self.rollout) * self.rollout
 
     def identity(self) -> dict[str, Any]:
         d = dataclasses.asdict(self)
@@ -186,13 +203,16 @@ def train(
     validate_every: int = 100_000,
     validation_episodes: int = 60,
     progress: Callable[[int, int], None] | None = None,
+    resumed: Callable[[int], None] | None = None,
     command: str = "",
 ) -> dict[str, Any]:
     """Train PPO as ``config`` says and write the exported policy to ``output`` (and
     ``output`` with ``.json`` and ``.png``: the learning curve). With ``checkpoints``, the
     model is saved there every ``validate_every`` steps (weights and optimiser state as
     torch tensors, loaded with ``weights_only``: no pickle), and a rerun resumes from the
-    last one. Returns the run's summary (steps, seconds, steps per second, curve)."""
+    last one (``resumed`` is told the steps it resumes at). ``progress(done, total)`` counts
+    to :attr:`TrainConfig.planned_steps`. Returns the run's summary (steps, seconds, steps
+    per second, curve)."""
     _need_rl()
     import torch
     from stable_baselines3 import PPO
@@ -231,6 +251,10 @@ def train(
         if saved is not None:
             elapsed0 = _restore(model, vec, saved)
             curve = list(saved["meta"]["curve"])
+            if resumed is not None:
+                resumed(int(model.num_timesteps))
+    if progress is not None:
+        progress(int(model.num_timesteps), config.planned_steps)
 
     t0 = time.perf_counter()
 
@@ -248,7 +272,7 @@ def train(
 
         def _on_step(self) -> bool:
             if progress is not None:
-                progress(self.num_timesteps, config.steps)
+                progress(self.num_timesteps, config.planned_steps)
             return True
 
         def _on_rollout_start(self) -> None:

@@ -11,43 +11,56 @@ import inspect
 import re
 import sys
 import threading
+import warnings
 from typing import Any, Generic, TypeVar
 
-from copi.errors import CopiError, InvalidArgumentError
+from copi.errors import CopiError, InvalidArgumentError, PluginWarning
 
-__all__ = ["Registry", "load_entry_points", "origin_of"]
+__all__ = ["Registry", "failed_entry_points", "load_entry_points", "origin_of"]
 
 _LOADED: set[tuple[str, str, str]] = set()
+_FAILED: dict[str, list[str]] = {}
 _LOCK = threading.RLock()
 
 
 def load_entry_points(group: str) -> int:
     """Call every entry point of ``group`` not called yet in this process (a package
     installed, or put on the path, since the last call is picked up); returns how many
-    were called. An entry point that cannot be loaded, or whose call fails, is refused in
-    one line naming it."""
+    were called. An entry point that cannot be loaded, or whose call fails, is skipped
+    with one :class:`~copi.errors.PluginWarning` naming it (one broken package does not
+    stop the others, nor copi's own); :func:`failed_entry_points` keeps what it said, so
+    that a name only it could have registered is refused saying why."""
     called = 0
     with _LOCK:
         for ep in importlib.metadata.entry_points(group=group):
             key = (group, ep.name, ep.value)
             if key in _LOADED:
                 continue
-            _LOADED.add(key)  # once, even if it fails: the error says so
+            _LOADED.add(key)  # once, even if it fails: the warning says so
             try:
                 hook = ep.load()
                 if callable(hook):
                     hook()
             except CopiError as exc:
-                raise InvalidArgumentError(
-                    f"entry point {ep.name!r} ({ep.value}) of {group}: {exc}"
-                ) from None
+                _skip(group, f"entry point {ep.name!r} ({ep.value}) of {group}: {exc}")
+                continue
             except Exception as exc:
-                raise InvalidArgumentError(
-                    f"entry point {ep.name!r} ({ep.value}) of {group} cannot be loaded "
-                    f"({type(exc).__name__}: {exc})"
-                ) from None
+                _skip(group, f"entry point {ep.name!r} ({ep.value}) of {group} cannot be "
+                             f"loaded ({type(exc).__name__}: {exc})")  # fmt: skip
+                continue
             called += 1
     return called
+
+
+def _skip(group: str, message: str) -> None:
+    _FAILED.setdefault(group, []).append(message)
+    warnings.warn(f"{message}; skipped", PluginWarning, stacklevel=3)
+
+
+def failed_entry_points(group: str) -> tuple[str, ...]:
+    """What each entry point of ``group`` that could not be loaded said, in order."""
+    with _LOCK:
+        return tuple(_FAILED.get(group, ()))
 
 
 @functools.lru_cache(maxsize=1)
@@ -176,6 +189,14 @@ class Registry(Generic[T]):
             load_entry_points(self.group)
             item = self._items.get(name)
         return item
+
+    def unknown(self, name: str) -> str:
+        """The end of the message refusing ``name``: the entry points of this registry's
+        group that could not be loaded (one of them may have been meant to register it)."""
+        failed = failed_entry_points(self.group)
+        if not failed:
+            return ""
+        return f" ({'; '.join(failed)}: it may have registered {name!r})"
 
     def names(self) -> tuple[str, ...]:
         """Every registered name: copi's own first, in the order registered."""

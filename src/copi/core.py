@@ -11,10 +11,12 @@ runner hands the method only what that level contains:
 ========  ==========================================================================
 level     what the method receives
 ========  ==========================================================================
-sensor    the ring of ranges and the goal's position relative to the agent
-map       plus the static world (and so the agent's position in it, the static route,
-          and the reading the static map alone would give, which tells walls apart
-          from moving obstacles)
+sensor    the ring of ranges, the goal's position relative to the agent, and the
+          global direction toward it (or along the map the agent builds, with the
+          ``mapping`` and ``causal`` strategies)
+map       plus the static world (and so the agent's position in it, the global
+          direction along the static route, and the reading the static map alone
+          would give, which tells walls apart from moving obstacles)
 oracle    plus every moving obstacle's position, radius and velocity
 future    plus the whole future of every moving obstacle (they ignore the agent, so
           it is recorded before the episode): only for the clairvoyant *bound*
@@ -42,6 +44,7 @@ Examples
 from __future__ import annotations
 
 import abc
+import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal, get_args
 
@@ -178,6 +181,17 @@ class Observation:
     odometry: NDArray[np.float64] | None = None
     """The agent's position relative to where its life in this world began (lifelong
     runs, every level; None otherwise): what its own motion tells it, not a map."""
+    direction: NDArray[np.float64] | None = None
+    """The level's global direction, shape (2,), a unit vector in the world's axes (or
+    zero at the goal): along the static route at ``map`` and above (the shortest path
+    on the static world for the agent's radius, replanned when the agent loses sight of
+    it), toward the goal at ``sensor`` (along the map the agent builds as it goes with
+    the ``mapping`` and ``causal`` strategies). Every level; handed to a method that does
+    not find its own (:attr:`Agent.steers_itself` False), so that any method follows
+    the same route as copi's own; None for one that does."""
+    reach: float = math.inf
+    """How far ahead along :attr:`direction` the point aimed at lies, agent steps (the
+    next corner of the route, or the goal): a method may slow down to stop there."""
 
 
 class Agent(abc.ABC):
@@ -193,6 +207,11 @@ class Agent(abc.ABC):
     """The method's name in results (e.g. ``copi-learnt``, ``dwa``)."""
     sensing: Sensing = "sensor"
     """The least sensing level the method needs."""
+    steers_itself: bool = False
+    """The method finds its own global direction (copi's methods and baselines do,
+    through :class:`copi.online.Steering`); when False, the runner finds it and hands it
+    over as :attr:`Observation.direction` each step, its cost counted in the decision's
+    time."""
 
     @abc.abstractmethod
     def reset(self, task: Task) -> None:

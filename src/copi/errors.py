@@ -17,6 +17,7 @@ __all__ = [
     "MapFileError",
     "MethodError",
     "NotFittedError",
+    "PluginWarning",
     "ResultsError",
     "WorldFileError",
 ]
@@ -70,6 +71,12 @@ class MethodError(CopiError):
     """A method broke the :class:`~copi.core.Agent` contract during an episode: it raised,
     or returned something that is not a velocity. The message names the method, the step,
     and what it did; the run stops there (what was stored stays)."""
+
+
+class PluginWarning(UserWarning):
+    """Another package's entry point could not be loaded: it is skipped (what it would
+    have registered is missing), and only a command that names one of its methods or
+    families fails, saying why."""
 
 
 class ResultsError(CopiError):

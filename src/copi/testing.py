@@ -74,6 +74,7 @@ class _Probe(Agent):
         self.agent = agent
         self.name = agent.name
         self.sensing = agent.sensing
+        self.steers_itself = agent.steers_itself
         self.level = level
         self.episode = episode
         self.actions: list[np.ndarray] = []

@@ -12,12 +12,13 @@ from scipy import stats
 
 from copi.baselines import CompassGuard, Straight
 from copi.bounds import TURN_SD, Clairvoyant, GoalField, ModelOracle
-from copi.bounds._kernels import hindsight_values, sample_futures
-from copi.bounds._model_oracle import _OFFSETS
+from copi.bounds._kernels import sample_futures
 from copi.core import check_sensing
 from copi.errors import InvalidArgumentError
 from copi.geometry import clearance
 from copi.methods import method_spec
+from copi.planning.futures import OFFSETS as _OFFSETS
+from copi.planning.futures import hindsight_values
 from copi.runs import draw_episode, make_task, obstacle_future, run_episode
 from copi.world import ObstacleSpec, Simulator, World
 

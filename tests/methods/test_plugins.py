@@ -50,7 +50,7 @@ def test_a_package_adds_a_method_and_a_family_the_benchmark_runs(
     assert "[" in cells[14] and "]" in cells[14]  # a paired interval of Δ success
     assert "## two-rooms (12 episodes)" in text
     report = (out / "benchmark.md").read_text()
-    assert "| sidestep | sensor | head for the goal, step aside" in report
+    assert "| sidestep | sensor | follow the global direction, step aside" in report
     # the method passes the conformance check
     from copi_example_plugin import Sidestep
 
@@ -123,15 +123,59 @@ def test_bad_registrations_are_refused(call, message: str) -> None:
         call()
 
 
-def test_a_broken_entry_point_is_one_line(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
-) -> None:
-    info = tmp_path / "broken_plugin-0.1.dist-info"
-    info.mkdir()
+@pytest.fixture
+def broken_plugin(tmp_path: Path, monkeypatch: pytest.MonkeyPatch):
+    """A package whose entry point names a module that is not there."""
+    import copi._plugins
+
+    info = tmp_path / "plugins" / "broken_plugin-0.1.dist-info"
+    info.mkdir(parents=True)
     (info / "METADATA").write_text("Metadata-Version: 2.1\nName: broken-plugin\nVersion: 0.1\n")
     (info / "entry_points.txt").write_text("[copi.methods]\nbroken = no_such_module:register\n")
-    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.syspath_prepend(str(tmp_path / "plugins"))
+    yield
+    monkeypatch.undo()
+    copi._plugins._LOADED.clear()
+    copi._plugins._FAILED.clear()
+
+
+BROKEN = "entry point 'broken' (no_such_module:register) of copi.methods cannot be loaded"
+
+
+@pytest.mark.filterwarnings("default::copi.errors.PluginWarning")
+@pytest.mark.parametrize("command", [
+    ["list"],
+    ["benchmark", "-o", "b", "--methods", "dwa@sensor", "--families", "star", "--episodes", "1",
+     "--workers", "1"],
+], ids=["list", "benchmark"])  # fmt: skip
+def test_a_broken_entry_point_is_skipped_with_one_warning(
+    broken_plugin: None, command: list[str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    # copi's own commands run, saying once what was skipped
+    monkeypatch.chdir(tmp_path)
+    code, text, err = run(command, capsys)
+    assert code == 0, err
+    warnings = [ln for ln in err.splitlines() if ln.startswith("copi: warning:")]
+    assert warnings == [f"copi: warning: {BROKEN} (ModuleNotFoundError: No module named "
+                        "'no_such_module'); skipped"], err  # fmt: skip
+    assert "dwa" in text if command == ["list"] else (tmp_path / "b" / "benchmark.sqlite").exists()
+
+
+@pytest.mark.filterwarnings("default::copi.errors.PluginWarning")
+def test_a_name_only_a_broken_entry_point_could_register_says_why(
+    broken_plugin: None, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     code, _, err = run(["benchmark", "-o", str(tmp_path / "b"), "--methods", "ghost"], capsys)
-    line = _one_line_error(code, err)
-    assert "entry point 'broken' (no_such_module:register) of copi.methods cannot be loaded" in line
+    assert err.count("copi: warning:") == 1  # the skipped entry point, then the error
+    line = _one_line_error(code, "\n".join(ln for ln in err.splitlines() if "warning" not in ln))
+    assert "got 'ghost'" in line and BROKEN in line and "it may have registered 'ghost'" in line
     assert not (tmp_path / "b").exists()
+
+
+def test_a_broken_entry_point_warns_in_python(broken_plugin: None) -> None:
+    from copi.errors import PluginWarning
+
+    with pytest.warns(PluginWarning, match="cannot be loaded"):
+        names = method_names()
+    assert "dwa" in names and "broken" not in names

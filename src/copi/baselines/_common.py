@@ -59,6 +59,7 @@ class Steered(Agent):
 
     name = "steered"
     sensing = "sensor"
+    steers_itself = True  # its own Steering: the same direction the runner would hand it
     explain = False
     """Keep each decision's candidates and their scores in :attr:`last_candidates`
     (``copi watch`` sets it; off, a decision costs nothing more)."""

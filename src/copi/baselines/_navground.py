@@ -52,6 +52,7 @@ class NavgroundAgent(Agent):
     """
 
     sensing = "oracle"
+    steers_itself = True
 
     def __init__(self, behavior: str, *, safety_margin: float = 0.3, horizon: float = 5.0) -> None:
         if not navground_available():

@@ -51,6 +51,7 @@ class Replan(Agent):
 
     name = "replan"
     sensing = "oracle"
+    steers_itself = True
 
     def __init__(
         self, *, inflate: float = 1.0, every: int = 5, lookahead: float = 3.0, quad_segs: int = 2

@@ -10,9 +10,10 @@
 Both are marked as bounds in every table (:attr:`copi.methods.MethodSpec.bound`).
 """
 
-from copi.bounds._clairvoyant import Clairvoyant, compass_moves
-from copi.bounds._field import GoalField
+from copi.bounds._clairvoyant import Clairvoyant
 from copi.bounds._model_oracle import TURN_SD, ModelOracle
+from copi.planning import GoalField
+from copi.planning.futures import compass_moves
 
 __all__ = [
     "Clairvoyant",

@@ -8,25 +8,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from copi.bounds._field import GoalField
 from copi.bounds._kernels import spacetime_astar
 from copi.core import Agent, Observation, Task, check_sensing
 from copi.errors import InvalidArgumentError
+from copi.planning import GoalField
+from copi.planning.futures import compass_moves
 
-__all__ = ["Clairvoyant", "compass_moves"]
-
-
-def compass_moves(n_dirs: int = 16, speeds: tuple[float, ...] = (1.0, 0.5)) -> tuple[
-    NDArray[np.float64], NDArray[np.int64]
-]:
-    """The moves of the space-time searches: ``n_dirs`` directions at each of ``speeds``,
-    and waiting (last). Returns (displacements (m, 2), direction index of each, -1 for
-    waiting)."""
-    ang = 2 * np.pi * np.arange(n_dirs) / n_dirs
-    unit = np.column_stack([np.cos(ang), np.sin(ang)])
-    moves = np.vstack([s * unit for s in speeds] + [np.zeros((1, 2))])
-    dirs = np.concatenate([np.arange(n_dirs)] * len(speeds) + [np.array([-1])])
-    return np.ascontiguousarray(moves), dirs.astype(np.int64)
+__all__ = ["Clairvoyant"]
 
 
 class Clairvoyant(Agent):
@@ -60,6 +48,7 @@ class Clairvoyant(Agent):
 
     name = "clairvoyant"
     sensing = "future"
+    steers_itself = True
 
     def __init__(self, *, cell: float = 0.2, weight: float = 1.5, max_nodes: int = 400_000):
         if not (math.isfinite(cell) and cell > 0):

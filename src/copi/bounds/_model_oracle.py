@@ -3,26 +3,15 @@ how the world moves, but not its future."""
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from copi.bounds._clairvoyant import compass_moves
-from copi.bounds._field import GoalField
-from copi.bounds._kernels import (
-    escape_move,
-    field_grid,
-    hindsight_values,
-    occupancy,
-    risk_values,
-    sample_futures,
-    window,
-)
+from copi.bounds._kernels import sample_futures
 from copi.core import Agent, Observation, Sensing, Task, check_sensing
 from copi.errors import InvalidArgumentError
-from copi.geometry import clearance
+from copi.planning.futures import FuturesPlanner
 
 __all__ = ["ModelOracle", "TURN_SD"]
 
@@ -33,15 +22,6 @@ agent at level ``oracle`` cannot read off what it sees (it sees positions and th
 velocities of the last step: speeds and headings)."""
 
 _RETRIES = 4  # the simulator's headings tried by a disc a wall stops
-
-# Grid moves of the backward induction (in cells of ``res`` = 0.5: length 0, 0.5, 0.71 and
-# 1 agent step), and for each, the fractions of the way at which it is checked for walls.
-_OFFSETS = np.array(
-    [(0, 0), (1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1),
-     (2, 0), (-2, 0), (0, 2), (0, -2)], dtype=np.int64,
-)  # fmt: skip
-_RES = 0.5
-_PLANS = ("hindsight", "mean", "greedy")
 
 
 class ModelOracle(Agent):
@@ -114,6 +94,7 @@ class ModelOracle(Agent):
 
     name = "model-oracle"
     sensing: Sensing = "oracle"
+    steers_itself = True  # it plans on the static world itself
 
     def __init__(
         self,
@@ -132,19 +113,8 @@ class ModelOracle(Agent):
             raise InvalidArgumentError(
                 f"samples must be a whole number in 1 .. 256; got {samples!r}"
             )
-        if int(horizon) != horizon or not 2 <= horizon <= 40:
-            raise InvalidArgumentError(
-                f"horizon must be a whole number in 2 .. 40; got {horizon!r}"
-            )
-        if plan not in _PLANS:
-            raise InvalidArgumentError(
-                f"plan must be one of {', '.join(_PLANS)}; got {plan!r}"
-            )
-        if not (isinstance(discount, int | float) and 0 < discount <= 1):
-            raise InvalidArgumentError(f"discount must be a number in (0, 1]; got {discount!r}")
-        for key, v in (("risk", risk), ("loss", loss), ("margin", margin), ("escape", escape)):
-            if not (isinstance(v, int | float) and math.isfinite(v) and 0 <= v <= 1e4):
-                raise InvalidArgumentError(f"{key} must be a number in [0, 10000]; got {v!r}")
+        self.planner = FuturesPlanner(horizon=horizon, plan=plan, risk=risk, loss=loss,
+                                      discount=discount, margin=margin, escape=escape)  # fmt: skip
         self.samples = int(samples)
         self.horizon = int(horizon)
         self.risk = float(risk)
@@ -153,8 +123,8 @@ class ModelOracle(Agent):
         self.escape = float(escape)
         self.margin = float(margin)
         self.seed = int(seed)
-        self.plan = plan
-        self.moves, _ = compass_moves()
+        self.plan_kind = plan
+        self.moves = self.planner.moves
         self._risks: list[float] = []
         # the motion model: the simulator's turn spread; a disc seen waiting moves at the
         # others' greatest speed (a subclass that estimates them sets both each step)
@@ -169,43 +139,11 @@ class ModelOracle(Agent):
                 f"task at {task.sensing!r} without them"
             )
         self.rng = np.random.default_rng(self.seed)
-        self.r = float(task.agent_radius)
-        self.tol = float(task.goal_tolerance)
-        self.goal = np.asarray(task.goal, dtype=np.float64).copy()
-        self.segs = np.ascontiguousarray(task.world.segments)
-        self.field = GoalField(task.world, self.goal, self.r)
-        f = self.field
-        # The episode's grids: cells of _RES from the field's origin; walls checked on a
-        # grid twice as fine (cell centres, midpoints, quarter points of every move).
-        ny = int(f.dist.shape[0] * f.h / _RES) + 2
-        nx = int(f.dist.shape[1] * f.h / _RES) + 2
-        fine = _RES / 4
-        fy, fx = np.mgrid[0 : 4 * ny, 0 : 4 * nx]
-        pts = np.column_stack([f.x0 + fine * fx.ravel(), f.y0 + fine * fy.ravel()])
-        inside = task.world.contains(pts)
-        clear = np.where(inside, clearance(pts, self.segs), 0.0).reshape(4 * ny, 4 * nx)
-        self.clear = np.ascontiguousarray(clear)
-        self.fine = fine
-        free = clear >= self.r
-        ii, jj = np.mgrid[0:ny, 0:nx]
-        self.ok = free[4 * ii, 4 * jj]
-        self.mid_ok = np.zeros((len(_OFFSETS), ny, nx), dtype=bool)
-        for o, (di, dj) in enumerate(_OFFSETS):
-            good = self.ok.copy()
-            for frac in (1, 2, 3, 4):  # quarter points of the move, in fine cells
-                a = 4 * ii + di * frac
-                b = 4 * jj + dj * frac
-                inside = (a >= 0) & (b >= 0) & (a < 4 * ny) & (b < 4 * nx)
-                good &= inside & free[np.clip(a, 0, 4 * ny - 1), np.clip(b, 0, 4 * nx - 1)]
-            self.mid_ok[o] = good
-        self.terminal = field_grid(f.dist, f.x0, f.y0, f.h, f.x0, f.y0, _RES, ny, nx,
-                                   self.goal[0], self.goal[1])  # fmt: skip
-        cy = f.y0 + _RES * ii
-        cx = f.x0 + _RES * jj
-        self.goal_cells = np.hypot(cx - self.goal[0], cy - self.goal[1]) <= self.tol
-        self.terminal[self.goal_cells] = 0.0
-        # the window: as far as the horizon's steps go (greedy: the first move's reach)
-        self._half = (int(math.ceil(self.horizon / _RES)) if self.plan != "greedy" else 2) + 1
+        self.planner.reset(task.world, np.asarray(task.goal, dtype=np.float64),
+                           float(task.agent_radius), float(task.goal_tolerance))  # fmt: skip
+        pl = self.planner
+        self.r, self.tol, self.goal, self.segs = pl.r, pl.tol, pl.goal, pl.segs
+        self.field, self.clear, self.fine = pl.field, pl.clear, pl.fine
         self._risks = []
 
     def act(self, obs: Observation) -> NDArray[np.float64]:
@@ -216,38 +154,18 @@ class ModelOracle(Agent):
         radii = np.ascontiguousarray(obstacles[:, 4])
         f = self.field
         seed = int(self.rng.integers(2**31 - 1))
-        steps = 2 if self.plan == "greedy" else self.horizon  # what the plan looks at
-        samples = sample_futures(obstacles, self.segs, self.samples, steps, self.turn_sd,
-                                 _RETRIES, seed, self.clear, f.x0, f.y0, self.fine,
-                                 self.fallback_speed)  # fmt: skip
-        n = 2 * self._half + 1
-        i0 = int(math.floor((p[1] - f.y0) / _RES)) - self._half
-        j0 = int(math.floor((p[0] - f.x0) / _RES)) - self._half
-        wx0 = f.x0 + j0 * _RES
-        wy0 = f.y0 + i0 * _RES
-        ok, mid_ok, terminal, goal = window(self.ok, self.mid_ok, self.terminal,
-                                            self.goal_cells, i0, j0, n)  # fmt: skip
-        if self.plan == "hindsight":
-            # a future with no way through: the horizon, the farthest distance to go, lost
-            fin = terminal[np.isfinite(terminal)]
-            cap = self.horizon + (float(fin.max()) if fin.size else 0.0) + self.loss
-            # solved only where the agent can be (the window's centre is its cell; the
-            # move's end, read bilinearly, is within 3 cells of it: box 2 keeps 4)
-            V = hindsight_values(samples, radii, self.r, self.margin, wx0, wy0, _RES, ok,
-                                 terminal, goal, _OFFSETS, mid_ok, cap, 2)  # fmt: skip
-        elif self.plan == "greedy":
-            V = np.stack([terminal, terminal])  # step 1's value: the distance to go
-        else:
-            # a cell stands for positions up to half a cell from its centre
-            P = occupancy(samples, radii, self.r, self.margin + _RES / 2, wx0, wy0, _RES, n)
-            V, cost = risk_values(P, ok, terminal, goal, _OFFSETS, mid_ok, self.risk,
-                                  self.discount)  # fmt: skip
-        m, _, risk = escape_move(
-            p[0], p[1], self.goal[0], self.goal[1], self.tol, self.r, self.segs, samples,
-            radii, self.moves, self.margin, self.escape, V, wx0, wy0, _RES, self.loss,
-            f.dist, f.x0, f.y0, f.h,
-        )  # fmt: skip
-        self._risks.append(float(risk))
+        samples = sample_futures(obstacles, self.segs, self.samples, self.planner.steps,
+                                 self.turn_sd, _RETRIES, seed, self.clear, f.x0, f.y0,
+                                 self.fine, self.fallback_speed)  # fmt: skip
+        return self.plan(p, samples, radii)
+
+    def plan(
+        self, p: NDArray[np.float64], samples: NDArray[np.float64], radii: NDArray[np.float64]
+    ) -> NDArray[np.float64]:
+        """The move from ``p`` against sampled futures of the discs (see
+        :meth:`copi.planning.futures.FuturesPlanner.plan`)."""
+        m, risk = self.planner.plan(p, samples, radii)
+        self._risks.append(risk)
         return np.zeros(2) if m < 0 else self.moves[m].copy()
 
     def counters(self) -> dict[str, Any]:

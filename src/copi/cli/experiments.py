@@ -178,8 +178,9 @@ def benchmark_command(
     ] = None,
     against: Annotated[
         str | None,
-        typer.Option("--against", help="The method every row is paired against (default: "
-                     "copi-learnt, else the first method run)."),
+        typer.Option("--against", help="The method every row is paired against, at the "
+                     "row's own level and strategy: a name, no @LEVEL (default: copi-learnt, "
+                     "else the first method run)."),
     ] = None,
     episodes: Annotated[
         int | None, typer.Option("--episodes", min=1, help="Episodes per family (1000).")
@@ -220,6 +221,11 @@ def benchmark_command(
         if not spec.available():
             raise CopiError(f"{r.method} needs {spec.missing}")
     if against is not None:
+        if any(c in against for c in "@:"):
+            name = against.split("@")[0].split(":")[0]
+            raise CopiError(f"--against takes a method's name (its rows are paired at each "
+                            f"level with the reference's row at the same level); got "
+                            f"{against!r}: try --against {name}")  # fmt: skip
         method_spec(against)
         if against not in {r.method for r in chosen}:
             raise CopiError(f"--against {against}: it is not among the methods run "
@@ -247,10 +253,14 @@ def benchmark_command(
         capabilities={p: str(output / f"capabilities-{p}.npz") for p in presets},
     )  # fmt: skip
     output.mkdir(parents=True, exist_ok=True)
-    with progress() as bar:
-        task = bar.add_task("learn capabilities", total=len(presets))
+    missing = {p for p in presets if not (output / f"capabilities-{p}.npz").exists()}
+    if missing:  # a progress line only for what is learnt (a file there is only checked)
+        with progress() as bar:
+            task = bar.add_task("learn capabilities", total=len(missing))
+            ensure_capabilities(output, presets, seed=seed)
+            bar.update(task, completed=len(missing))
+    else:
         ensure_capabilities(output, presets, seed=seed)
-        bar.update(task, completed=len(presets))
     results = output / "benchmark.sqlite"
     total = n * len(config.groups) * len(chosen)
     _with_progress(

@@ -14,6 +14,7 @@ import os
 import sqlite3
 import sys
 import threading
+import warnings
 
 import typer
 from rich.text import Text
@@ -24,7 +25,7 @@ except ImportError:  # pragma: no cover - older typer, on click itself
     from click import exceptions as _click  # type: ignore[no-redef]
 
 from copi.cli._common import app, console
-from copi.errors import CopiError
+from copi.errors import CopiError, PluginWarning
 
 # Importing a group's module registers its commands; this order is the order of --help.
 for _group in ("world", "learning", "experiments", "watch", "rl"):
@@ -35,6 +36,18 @@ def _error(message: str) -> None:
     line = " ".join(str(message).split())  # one line, whatever the message held
     console.print(Text("copi: error:", style="red"), Text(line), highlight=False)
     sys.exit(2)
+
+
+_show_warning = warnings.showwarning
+
+
+def _warning(message, category, filename, lineno, file=None, line=None):  # type: ignore[no-untyped-def]
+    """Another package's entry point that could not be loaded: one line, and on we go."""
+    if issubclass(category, PluginWarning):
+        text = " ".join(str(message).split())
+        console.print(Text("copi: warning:", style="yellow"), Text(text), highlight=False)
+        return
+    _show_warning(message, category, filename, lineno, file, line)
 
 
 def _interrupted(exc: BaseException | None) -> None:
@@ -97,6 +110,7 @@ def _run(argv: list[str] | None) -> None:
 
 def main(argv: list[str] | None = None) -> None:
     """Run the command line; bad input ends with one line on stderr and exit code 2."""
+    warnings.showwarning = _warning
     try:
         _run(argv)
         sys.exit(0)  # as click's standalone mode always did

@@ -12,6 +12,7 @@ from rich.table import Table
 from copi._files import check_outputs
 from copi.cli._common import app, out, progress, safe_name, world_app
 from copi.errors import CopiError
+from copi.world import shipped_map, shipped_maps
 
 
 @world_app.command("sample")
@@ -86,7 +87,9 @@ def world_show(
 
 @world_app.command("import-movingai")
 def world_import_movingai(
-    map_file: Annotated[Path, typer.Argument(help="Moving AI .map file.")],
+    map_file: Annotated[Path, typer.Argument(
+        help="Moving AI .map file, or the name of one copi ships: "
+             + ", ".join(shipped_maps()) + ".")],
     output: Annotated[Path, typer.Option("-o", "--output", help="World file to write (JSON).")],
     near: Annotated[
         tuple[int, int] | None,
@@ -113,6 +116,7 @@ def world_import_movingai(
     from copi.planning.movingai import map_world, read_map
     from copi.world import save_worlds, scaled_map_world
 
+    map_file = shipped_map(map_file)
     check_outputs({"the world file": (output, "json")}, inputs=[map_file])
     grid = read_map(map_file)
     if passage is not None:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Sequence
 from typing import Any, SupportsFloat
@@ -288,11 +289,14 @@ class NavigationEnv(gymnasium.Env[ObsType, ObsType]):
 
     def observation(self) -> Observation:
         """The current observation as a copi :class:`~copi.core.Observation` (level
-        ``sensor``; the goal unscaled)."""
+        ``sensor``: the goal unscaled, the global direction toward it)."""
         sim = self.sim
         if sim is None:
             raise gymnasium.error.ResetNeeded("call reset() before observation()")
-        return Observation(ranges=sim.ranges.copy(), goal=sim.goal - sim.position)
+        goal = sim.goal - sim.position
+        dist = math.hypot(goal[0], goal[1])
+        return Observation(ranges=sim.ranges.copy(), goal=goal,
+                           direction=goal / dist if dist > 0 else np.zeros(2), reach=dist)
 
     def render(self) -> NDArray[np.uint8] | None:  # type: ignore[override]
         if self.render_mode is None:

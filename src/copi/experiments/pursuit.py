@@ -178,7 +178,8 @@ def run_game(config: PursuitConfig, k: int, agent: Agent | None = None) -> GameR
             # The game's direction as a far goal (no slowing down for a near one).
             norm = float(np.hypot(*wish))
             far = np.asarray(wish, dtype=np.float64) * (1e3 / norm) if norm > 0 else wish
-            obs = Observation(ranges=game.sim.ranges.copy(), goal=far, static=static)
+            obs = Observation(ranges=game.sim.ranges.copy(), goal=far, static=static,
+                              direction=far / 1e3 if norm > 0 else np.zeros(2))
             velocity = checked_act(agent, obs, game.t + 1)
         elif controller is None:
             velocity = wish

@@ -267,6 +267,7 @@ def method_spec(name: str) -> MethodSpec:
         hint = f" (now {legacy!r})" if legacy else ""
         raise InvalidArgumentError(
             f"method must be one of {', '.join(method_names())}; got {name!r}{hint}"
+            f"{REGISTRY.unknown(name)}"
         )
     return spec
 

@@ -123,6 +123,7 @@ class CopiAgent(Agent):
     """
 
     sensing = "sensor"
+    steers_itself = True
 
     def __init__(
         self,

@@ -64,6 +64,7 @@ class LearntAgent(Agent):
     """
 
     sensing = "sensor"
+    steers_itself = True
 
     def __init__(
         self,

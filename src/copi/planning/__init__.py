@@ -17,11 +17,13 @@ from copi.planning._cspace import (
     shortest_path,
 )
 from copi.planning._family_stats import FamilyStats, family_stats, mean_free_width
+from copi.planning._field import GoalField
 from copi.planning._grid import GridPlanner
 from copi.planning._visibility import Plan, VisibilityGraph
 
 __all__ = [
     "FamilyStats",
+    "GoalField",
     "GridPlanner",
     "Plan",
     "VisibilityGraph",

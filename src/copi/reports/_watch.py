@@ -84,6 +84,7 @@ class _Explaining(Agent):
         self.agent = agent
         self.name = agent.name
         self.sensing = agent.sensing
+        self.steers_itself = agent.steers_itself
         self.steps: list[Step] = []
 
     def reset(self, task: Task) -> None:

@@ -4,6 +4,7 @@ experiment shares, and the outcome and metrics it records."""
 from __future__ import annotations
 
 import copy
+import dataclasses
 import math
 import time
 from dataclasses import dataclass
@@ -14,12 +15,14 @@ from numpy.typing import NDArray
 
 from copi.core import Agent, Observation, Sensing, Task, check_sensing
 from copi.errors import CopiError, InvalidArgumentError, MethodError
+from copi.online import Steering
 from copi.planning import length_error_bound, shortest_path
 from copi.world import Simulator
 
 __all__ = [
     "EnvEpisode",
     "EpisodeOutcome",
+    "GlobalDirection",
     "checked_act",
     "make_task",
     "obstacle_future",
@@ -107,6 +110,45 @@ def velocity_of(action: Any, agent: Agent, step: int) -> NDArray[np.float64]:
             "velocity of finite numbers"
         )
     return a
+
+
+class GlobalDirection:
+    """The level's global direction for a method that does not find its own
+    (:attr:`copi.core.Agent.steers_itself` False): :class:`copi.online.Steering`, the
+    same that copi's methods and baselines follow, run by the runner, its direction put in
+    :attr:`Observation.direction` and :attr:`Observation.reach`.
+
+    One per agent, kept on it (``agent._global_direction``), so that in a lifelong run
+    the map the strategy builds lasts from task to task as copi's own do.
+    """
+
+    def __init__(self) -> None:
+        self.steering = Steering()
+
+    @classmethod
+    def of(cls, agent: Agent, task: Task) -> GlobalDirection | None:
+        """The agent's, reset for ``task``; None for a method that steers itself."""
+        if getattr(agent, "steers_itself", False):
+            return None
+        here: GlobalDirection | None = agent.__dict__.get("_global_direction")
+        if here is None:
+            here = cls()
+            agent.__dict__["_global_direction"] = here
+        here.steering.reset(task)
+        return here
+
+    def __call__(self, obs: Observation) -> Observation:
+        """``obs`` with the direction (and in a lifelong run at ``sensor``, the static
+        reading of the walls the strategy learnt, as copi's methods see it)."""
+        desired, reach = self.steering.aim(obs)
+        obs = self.steering.observe(obs)
+        d = np.asarray(desired, dtype=np.float64)
+        n = math.hypot(d[0], d[1])
+        return dataclasses.replace(obs, direction=d / n if n > 0 else np.zeros(2),
+                                   reach=float(reach))  # fmt: skip
+
+    def finish(self, outcome: str) -> None:
+        self.steering.finish(outcome)
 
 
 def optimal_to_goal(sim: Simulator, *, quad_segs: int = 16) -> float:
@@ -225,6 +267,7 @@ def run_episode(
         raise
     except BaseException as exc:
         raise _broke(agent, "reset", exc) from None
+    steer = GlobalDirection.of(agent, task)
     prev_centers = sim.centers.copy()
     velocities = sim.speed * np.column_stack([np.cos(sim.headings), np.sin(sim.headings)])
     length = 0.0
@@ -253,6 +296,8 @@ def run_episode(
             odometry=None if origin is None else pos - origin,
         )
         t0 = clock()
+        if steer is not None:
+            obs = steer(obs)
         try:
             action = agent.act(obs)
         except (KeyboardInterrupt, CopiError):
@@ -290,6 +335,8 @@ def run_episode(
         outcome = "success"
     else:
         outcome = "timeout"
+    if steer is not None:
+        steer.finish(outcome)
     try:
         agent.finish(outcome)
         counters = agent.counters()

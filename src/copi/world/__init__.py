@@ -35,6 +35,8 @@ from copi.world._family_maps import (
     maps_identity,
     movingai_dir,
     scaled_map_world,
+    shipped_map,
+    shipped_maps,
 )
 from copi.world._family_polygon import PolygonParams, is_star_shaped, polygon_world
 from copi.world._generate import (
@@ -94,6 +96,8 @@ __all__ = [
     "sample_world",
     "save_worlds",
     "scaled_map_world",
+    "shipped_map",
+    "shipped_maps",
     "unregister_family",
 ]
 

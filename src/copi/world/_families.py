@@ -126,6 +126,7 @@ def family_spec(family: str) -> FamilySpec:
     if spec is None:
         raise InvalidArgumentError(
             f"family must be one of {', '.join(family_names())}; got {family!r}"
+            f"{_FAMILIES.unknown(family)}"
         )
     return spec
 

@@ -21,11 +21,13 @@ from copi.world.gridmap import free_geometry, read_map, without_pinches
 
 __all__ = [
     "MOVINGAI_ENV",
-    "PACKAGED_MAPS",
     "MapsParams",
+    "PACKAGED_MAPS",
     "map_window_world",
     "maps_identity",
     "movingai_dir",
+    "shipped_map",
+    "shipped_maps",
 ]
 
 MOVINGAI_ENV = "COPI_MOVINGAI"
@@ -33,6 +35,28 @@ MOVINGAI_ENV = "COPI_MOVINGAI"
 
 PACKAGED_MAPS = Path(__file__).resolve().parents[1] / "data" / "movingai"
 """The ten Moving AI maps copi ships (their provenance and licence beside them)."""
+
+
+def shipped_maps() -> dict[str, Path]:
+    """The Moving AI maps copi ships, by file name (``room-32-32-4.map``: its path)."""
+    return {p.name: p for p in sorted(PACKAGED_MAPS.rglob("*.map"))}
+
+
+def shipped_map(path: str | os.PathLike[str]) -> Path:
+    """``path``, or when no such file is there and it names one of the maps copi ships
+    (:func:`shipped_maps`, with or without ``.map``), that map's path.
+
+    Examples
+    --------
+    >>> shipped_map("room-32-32-4.map").relative_to(PACKAGED_MAPS).as_posix()
+    'mapf/room-32-32-4.map'
+    """
+    p = Path(path)
+    if p.exists() or p.parent != Path("."):
+        return p
+    ours = shipped_maps()
+    name = p.name if p.suffix == ".map" else f"{p.name}.map"
+    return ours.get(name, p)
 
 
 def movingai_dir(data_dir: str | os.PathLike[str] | None = None) -> Path:

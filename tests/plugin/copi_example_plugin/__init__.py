@@ -16,8 +16,9 @@ from copi.world import ObstacleSpec, World, register_family
 
 
 class Sidestep(Agent):
-    """Head for the goal; when the ray towards it is short, step to the freer side.
-    Level ``sensor``; hand-written, nothing learnt."""
+    """Follow the level's global direction; when the ray along it is short, step to the
+    freer side. Level ``sensor`` (at ``map`` the direction follows the static route);
+    hand-written, nothing learnt."""
 
     name = "sidestep"
     sensing = "sensor"
@@ -29,16 +30,14 @@ class Sidestep(Agent):
         self.n = task.n_rays
 
     def act(self, obs: Observation) -> np.ndarray:
-        g = np.asarray(obs.goal, dtype=np.float64)
-        d = math.hypot(g[0], g[1])
-        if d == 0:
+        u = np.asarray(obs.direction, dtype=np.float64)  # a unit vector, world axes
+        if not u.any():
             return np.zeros(2)
-        i = round(math.atan2(g[1], g[0]) / (2 * math.pi) * self.n) % self.n
-        u = g / d
+        i = round(math.atan2(u[1], u[0]) / (2 * math.pi) * self.n) % self.n  # its ray
         if obs.ranges[i] < self.clearance:
             left, right = obs.ranges[(i + self.n // 4) % self.n], obs.ranges[i - self.n // 4]
             u = np.array([-u[1], u[0]]) if left >= right else np.array([u[1], -u[0]])
-        return u * min(1.0, d)
+        return u * min(1.0, obs.reach)  # no farther than the point aimed at
 
 
 def two_rooms(rng: np.random.Generator, *, name: str | None = None) -> World:
@@ -56,6 +55,6 @@ def two_rooms(rng: np.random.Generator, *, name: str | None = None) -> World:
 
 def register() -> None:
     """What the entry points call."""
-    register_method("sidestep", Sidestep, summary="head for the goal, step aside from a "
-                    "short ray (an example plugin; hand-written)")  # fmt: skip
+    register_method("sidestep", Sidestep, summary="follow the global direction, step aside "
+                    "from a short ray (an example plugin; hand-written)")  # fmt: skip
     register_family("two-rooms", two_rooms, summary="two rooms and a door (an example plugin)")

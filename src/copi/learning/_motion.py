@@ -1,0 +1,550 @@
+"""A learnt model of what moves (paper §II, learnt like the rest: once, without any
+task, from the agent's own exploration; self-supervised: the later readings are the
+labels).
+
+What it perceives. At level ``map`` the agent knows the reading the static map alone
+would give; a ray that reads nearer by more than :data:`copi.core.EXPLAINED` hit
+something that moves. Neighbouring such hits form an arc, fitted by a circle
+(:func:`detect_discs`): the moving bodies of one reading. :class:`MotionTracker`
+follows them from reading to reading (each body's displacement is what the next reading
+says of it) and keeps each one's heading and speed.
+
+What it learns (:func:`learn_motion`). From random walks among moving bodies, each body
+followed over three readings in a row gives one example: how far it could go ahead
+before a wall (from the static map), and how it turned and how fast it went next.
+Counted into tables (:class:`MotionModel`), they are the model: P(turn | room ahead)
+and P(speed | last speed), and the speed of a body seen once. The turn is learnt in the
+body's own frame (its heading is the axis), and every example is counted mirrored too:
+the symmetry group of §II-C acting on motion, so that one table serves every heading
+and both turning senses.
+
+What it predicts (:func:`sample_motion`). Futures of every body made out, as samples:
+each step a turn drawn from the table of the room ahead, a speed from the last one's, a
+move that a wall stops. The planner of ``copi-predictive`` plans over them
+(:class:`copi.online.PredictiveAgent`). On held-out walks the mean of the samples is
+nearer the body's later places than the constant-velocity guess from the last two
+readings (:attr:`MotionModel.stats`, and a test against the simulator's own record).
+
+Nothing in it is told the simulator's rule (a heading turning by N(0, 0.6), a speed of
+its family, a random new heading at a wall): the tables are what the readings showed.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numba import njit
+from numpy.typing import NDArray
+
+from copi._validation import positive_int
+from copi.core import EXPLAINED
+from copi.errors import InvalidArgumentError
+from copi.geometry.kernels import local_segments, sweep_one
+from copi.world import RandomWalk, RangeSensor, Simulator, random_world, sample_world
+
+__all__ = [
+    "AHEAD_EDGES",
+    "MotionModel",
+    "MotionTracker",
+    "N_TURN",
+    "SPEED_EDGES",
+    "detect_discs",
+    "fit_circle",
+    "learn_motion",
+    "motion_errors",
+    "sample_motion",
+]
+
+RADII = (0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0)
+"""Radii tried on an arc of :data:`WELL` rays or more."""
+JOIN = 0.8
+"""Neighbouring hits farther apart than this belong to different bodies."""
+WELL = 3
+"""Rays on a body for its fit (and its displacement) to count as measured."""
+
+N_TURN = 36
+"""Bins of a turn in [-pi, pi] (10 degrees each)."""
+SPEED_EDGES = np.linspace(0.0, 1.6, 17)
+"""Bins of a speed, agent steps per step (a body seen faster is in the last)."""
+AHEAD_EDGES = np.array([0.0, 0.8, 1.6, 3.2, np.inf])
+"""Bins of the room ahead of a body before a wall, agent steps: the context of a turn."""
+GATE = 1.6
+"""Farthest a body is taken to have moved in one step when it is followed with no model
+(learning): the fastest body, 1, and what a fit may be off by."""
+
+
+def fit_circle(
+    pts: NDArray[np.float64], r: float, c0: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], float]:
+    """Centre of the circle of radius ``r`` through ``pts`` (Gauss-Newton from ``c0``) and
+    its mean squared residual. Eight Gauss-Newton steps written out, because
+    scipy.optimize.least_squares costs more to call than this whole fit of a few points."""
+    c = c0.copy()
+    for _ in range(8):
+        d = pts - c
+        n = np.sqrt((d**2).sum(axis=1)) + 1e-12
+        jac = -d / n[:, None]
+        step = np.linalg.lstsq(jac, -(n - r), rcond=None)[0]
+        c = c + step
+    d = pts - c
+    return c, float(((np.sqrt((d**2).sum(axis=1)) - r) ** 2).mean())
+
+
+def detect_discs(
+    ranges: NDArray[np.float64],
+    static: NDArray[np.float64],
+    position: NDArray[np.float64],
+    unit: NDArray[np.float64],
+    max_range: float,
+    radii_seen: list[float],
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
+    """The moving bodies of one reading: centres (k, 2), radii (k,) and the rays on each.
+
+    Hits nearer than the static reading by more than :data:`copi.core.EXPLAINED` form
+    arcs of neighbouring rays (less than :data:`JOIN` apart; the arc across ray 0 is
+    one). An arc of :data:`WELL` rays or more is fitted by a circle (each radius of
+    :data:`RADII` tried, the best fit kept; its radius is appended to ``radii_seen``);
+    a shorter one is taken for a body of the mean radius seen so far (0.75 before any)
+    behind its middle hit. ``unit``: the rays' directions (n_rays, 2)."""
+    s, st = ranges, static
+    n = len(s)
+    hits = position + s[:, None] * unit
+    idx = np.flatnonzero((s < st - EXPLAINED) & (s < max_range - 1e-9))
+    if idx.size == 0:
+        return np.zeros((0, 2)), np.zeros(0), np.zeros(0, dtype=np.int64)
+    arcs: list[list[int]] = []
+    cur = [int(idx[0])]
+    for a, b in zip(idx[:-1], idx[1:], strict=True):
+        if b == a + 1 and math.dist(hits[a], hits[b]) < JOIN:
+            cur.append(int(b))
+        else:
+            arcs.append(cur)
+            cur = [int(b)]
+    arcs.append(cur)
+    if (len(arcs) > 1 and arcs[0][0] == 0 and arcs[-1][-1] == n - 1
+            and math.dist(hits[0], hits[n - 1]) < JOIN):  # fmt: skip
+        arcs[0] = arcs.pop() + arcs[0]  # the arc across ray 0
+    centres, radii = [], []
+    for arc in arcs:
+        mid = arc[len(arc) // 2]
+        behind = s[mid]  # the centre lies beyond the middle hit
+        best: tuple[NDArray[np.float64], float, float] | None = None
+        short = float(np.mean(radii_seen)) if radii_seen else 0.75
+        for r in RADII if len(arc) >= WELL else (short,):
+            c0 = hits[mid] + r * unit[mid]
+            c, err = fit_circle(hits[arc], r, c0) if len(arc) > 1 else (c0, 0.0)
+            if math.dist(c, position) < behind:
+                c, err = c0, math.inf
+            if best is None or err < best[2] - 1e-9:
+                best = (c, r, err)
+        assert best is not None
+        centres.append(best[0])
+        radii.append(best[1])
+        if len(arc) >= WELL:
+            radii_seen.append(best[1])
+    return (np.array(centres), np.array(radii),
+            np.array([len(a) for a in arcs], dtype=np.int64))  # fmt: skip
+
+
+def _wrap(a: float) -> float:
+    return (a + math.pi) % (2 * math.pi) - math.pi
+
+
+def _bin(edges: NDArray[np.float64], v: float) -> int:
+    i = int(np.searchsorted(edges, v, side="right")) - 1
+    return min(max(i, 0), len(edges) - 2)
+
+
+@dataclass(frozen=True, eq=False)
+class MotionModel:
+    """What the agent learnt of how things move (see the module): tables of counts,
+    Laplace-smoothed when read (:meth:`turn_p`, :meth:`speed_p`, :meth:`start_p`)."""
+
+    turn_counts: NDArray[np.float64]
+    """(len(AHEAD_EDGES) - 1, N_TURN): turns seen, by the room ahead before them (each
+    example counted twice, as seen and mirrored)."""
+    speed_counts: NDArray[np.float64]
+    """(len(SPEED_EDGES) - 1, same): speeds seen, by the speed of the step before."""
+    start_counts: NDArray[np.float64]
+    """(len(SPEED_EDGES) - 1,): speeds seen at all (a body seen once moves at one)."""
+    radius: float
+    """Mean radius of the bodies measured well (a body of a short arc is taken for one)."""
+    stats: dict[str, Any] = field(default_factory=dict)
+    """What learning measured: examples, held-out errors against constant velocity."""
+
+    def turn_p(self) -> NDArray[np.float64]:
+        c = self.turn_counts + 0.5
+        return c / c.sum(axis=1, keepdims=True)
+
+    def speed_p(self) -> NDArray[np.float64]:
+        c = self.speed_counts + 0.5 * np.eye(len(self.speed_counts)) + 1e-3
+        return c / c.sum(axis=1, keepdims=True)
+
+    def start_p(self) -> NDArray[np.float64]:
+        c = self.start_counts + 1e-3
+        return c / c.sum()
+
+    def mean_speed(self) -> float:
+        mids = 0.5 * (SPEED_EDGES[:-1] + SPEED_EDGES[1:])
+        return float((self.start_p() * mids).sum())
+
+    def check(self) -> MotionModel:
+        """Itself, if its tables have the shapes and values a model has; else one clear
+        error (a file holding another is refused on load)."""
+        n_a, n_s = len(AHEAD_EDGES) - 1, len(SPEED_EDGES) - 1
+        for key, a, shape in (("motion_turn", self.turn_counts, (n_a, N_TURN)),
+                              ("motion_speed", self.speed_counts, (n_s, n_s)),
+                              ("motion_start", self.start_counts, (n_s,))):  # fmt: skip
+            if a.shape != shape:
+                raise InvalidArgumentError(f"{key} must have shape {shape}; got {a.shape}")
+            if not np.isfinite(a).all() or (a < 0).any() or (a > 1e9).any():
+                raise InvalidArgumentError(f"{key} must hold counts in 0 .. 1e9 (finite)")
+        if not (math.isfinite(self.radius) and 0.05 <= self.radius <= 5.0):
+            raise InvalidArgumentError(
+                f"the motion model's radius must be in 0.05 .. 5; got {self.radius!r}"
+            )
+        return self
+
+
+class MotionTracker:
+    """The moving bodies of a ``map``-level agent's readings, followed from step to step.
+
+    Each reading's bodies (:func:`detect_discs`) are matched to the last step's: with a
+    :class:`MotionModel`, the likeliest pairs first (the body's turn and speed under the
+    model; a pair the model gives less than ``floor`` times the likeliest is refused);
+    without one (learning), the nearest pairs within :data:`GATE`. A body's heading is
+    its last displacement's direction (known once it moved more than 0.2 between two
+    well-measured fits), its speed the mean of its well-measured displacements.
+
+    ``rows()`` gives the bodies as rows (x, y, heading, known, speed, radius).
+    """
+
+    def __init__(
+        self, n_rays: int, max_range: float, *, model: MotionModel | None = None
+    ) -> None:
+        ang = 2 * np.pi * np.arange(n_rays) / n_rays
+        self.unit = np.column_stack([np.cos(ang), np.sin(ang)])
+        self.max_range = float(max_range)
+        self.model = model
+        self._radii: list[float] = [] if model is None else [model.radius]
+        self.tracks: list[dict[str, Any]] = []
+        if model is not None:
+            self._lturn = np.log(model.turn_p().sum(axis=0) / len(model.turn_p()))
+            self._lstart = np.log(model.start_p())
+            self._lspeed = np.log(model.speed_p())
+            self._fallback = model.mean_speed()
+        self.examples: list[tuple[float, float, float, float]] = []
+        """(room ahead before the step, turn, last speed, speed) of each body followed
+        over three well-measured readings (what :func:`learn_motion` counts)."""
+
+    def _score(self, t: dict[str, Any], d: NDArray[np.float64]) -> float:
+        length = math.hypot(d[0], d[1])
+        if self.model is None:
+            return -length if length <= GATE else -math.inf
+        sb = _bin(SPEED_EDGES, length)
+        if length > SPEED_EDGES[-1]:
+            return -math.inf
+        if t["speed"] is None:
+            score = self._lstart[sb]
+        else:
+            score = self._lspeed[_bin(SPEED_EDGES, t["speed"]), sb]
+        if t["heading"] is not None and length > 0.2:
+            turn = _wrap(math.atan2(d[1], d[0]) - t["heading"])
+            score += self._lturn[_bin(_TURN_EDGES, turn)]
+        return float(score)
+
+    def update(
+        self,
+        ranges: NDArray[np.float64],
+        static: NDArray[np.float64],
+        position: NDArray[np.float64],
+        ahead: Callable[[NDArray[np.float64], float, float], float] | None = None,
+    ) -> NDArray[np.float64]:
+        """Follow one more reading; the bodies as :meth:`rows`. ``ahead(c, heading,
+        radius)``: the room before a wall (learning records it with each example)."""
+        C, R, rays = detect_discs(np.asarray(ranges, dtype=np.float64),
+                                  np.asarray(static, dtype=np.float64),
+                                  np.asarray(position, dtype=np.float64), self.unit,
+                                  self.max_range, self._radii)  # fmt: skip
+        pairs = []
+        for ti, t in enumerate(self.tracks):
+            for di in range(len(C)):
+                sc = self._score(t, C[di] - t["c"])
+                if sc > -math.inf:
+                    pairs.append((-sc, ti, di))
+        pairs.sort()
+        used: set[int] = set()
+        new: list[dict[str, Any] | None] = [None] * len(C)
+        for _, ti, di in pairs:
+            if ti in used or new[di] is not None:
+                continue
+            used.add(ti)
+            t = self.tracks[ti]
+            d = C[di] - t["c"]
+            length = math.hypot(d[0], d[1])
+            well = rays[di] >= WELL and t["rays"] >= WELL
+            heading = math.atan2(d[1], d[0]) if length > 0.2 else None
+            speed = t["speed"]
+            if well:
+                speed = length if speed is None else 0.5 * (speed + length)
+                if t["heading"] is not None and heading is not None and t["well_speed"]:
+                    room = ahead(t["c"], t["heading"], R[di]) if ahead is not None else math.inf
+                    self.examples.append((room, _wrap(heading - t["heading"]),
+                                          t["well_speed"], length))  # fmt: skip
+            new[di] = {"c": C[di].copy(), "r": float(R[di]), "rays": int(rays[di]),
+                       "heading": heading if heading is not None else t["heading"],
+                       "speed": speed, "well_speed": length if well else None}  # fmt: skip
+        for di in range(len(C)):
+            if new[di] is None:  # first seen: heading unknown
+                new[di] = {"c": C[di].copy(), "r": float(R[di]), "rays": int(rays[di]),
+                           "heading": None, "speed": None, "well_speed": None}  # fmt: skip
+        self.tracks = [t for t in new if t is not None]
+        return self.rows()
+
+    def rows(self) -> NDArray[np.float64]:
+        """The bodies followed now: (x, y, heading, known, speed, radius) each, a speed
+        of a body seen once that of the model (or 0.7 without one)."""
+        fallback = self._fallback if self.model is not None else 0.7
+        out = np.zeros((len(self.tracks), 6))
+        for i, t in enumerate(self.tracks):
+            known = t["heading"] is not None
+            out[i] = (t["c"][0], t["c"][1], t["heading"] if known else 0.0, float(known),
+                      t["speed"] if t["speed"] is not None else fallback, t["r"])  # fmt: skip
+        return out
+
+
+_TURN_EDGES = np.linspace(-math.pi, math.pi, N_TURN + 1)
+
+
+def _walk_examples(
+    family: str, k: int, steps: int, seed: int, sensor: RangeSensor, agent_radius: float
+) -> tuple[list[tuple[float, float, float, float]], list[float]]:
+    rng = np.random.default_rng([seed, k, 11])
+    world = random_world(rng) if family == "star" else sample_world(family, rng)
+    sim = Simulator.from_world(world, rng, agent_radius=agent_radius, sensor=sensor)
+    walk = RandomWalk(seed=rng)
+    tracker = MotionTracker(sensor.n_rays, sensor.max_range)
+    segs = np.ascontiguousarray(world.segments)
+
+    def ahead(c: NDArray[np.float64], heading: float, r: float) -> float:
+        local = local_segments(c[0], c[1], segs, 4.0 + r)
+        return float(min(sweep_one(c[0], c[1], math.cos(heading), math.sin(heading), local, r),
+                         1e3))  # fmt: skip
+
+    none = np.zeros((0, 2))
+    blocked = False
+    for _ in range(steps):
+        static = sensor.scan(world, sim.position, none, np.zeros(0))
+        tracker.update(sim.ranges, static, sim.position, ahead)
+        result = sim.step(walk(blocked))
+        blocked = result.blocked
+        if result.contact:  # start afresh: a walk stuck in a body teaches little
+            sim = Simulator.from_world(world, rng, agent_radius=agent_radius, sensor=sensor)
+            tracker.tracks = []
+    return tracker.examples, tracker._radii
+
+
+def learn_motion(
+    families: Sequence[str] = ("crowd", "star", "polygon", "indoor"),
+    worlds: int = 40,
+    steps: int = 150,
+    *,
+    seed: int = 0,
+    sensor: RangeSensor | None = None,
+    agent_radius: float = 0.3,
+    progress: Callable[[int, int], None] | None = None,
+) -> MotionModel:
+    """The motion model from random walks in ``worlds`` worlds of the ``families`` in
+    turn, ``steps`` steps each (world k draws from ``default_rng([seed, k, 11])``, apart
+    from exploration's and the probes'): every body followed over three well-measured
+    readings is one example (see the module). The held-out errors of the model's
+    predictions against constant velocity, on the last fifth of the worlds' examples,
+    are in :attr:`MotionModel.stats`."""
+    positive_int(worlds, "worlds")
+    positive_int(steps, "steps")
+    sensor = sensor or RangeSensor()
+    examples: list[tuple[float, float, float, float]] = []
+    radii: list[float] = []
+    for k in range(worlds):
+        ex, rs = _walk_examples(families[k % len(families)], k, steps, seed, sensor,
+                                agent_radius)  # fmt: skip
+        examples += ex
+        radii += rs
+        if progress is not None:
+            progress(k + 1, worlds)
+    n_a, n_s = len(AHEAD_EDGES) - 1, len(SPEED_EDGES) - 1
+    turn = np.zeros((n_a, N_TURN))
+    speed = np.zeros((n_s, n_s))
+    start = np.zeros(n_s)
+    for room, tn, last, v in examples:
+        a = _bin(AHEAD_EDGES, room)
+        turn[a, _bin(_TURN_EDGES, tn)] += 1.0
+        turn[a, _bin(_TURN_EDGES, -tn)] += 1.0  # mirrored: the same motion seen in a mirror
+        speed[_bin(SPEED_EDGES, last), _bin(SPEED_EDGES, v)] += 1.0
+        start[_bin(SPEED_EDGES, v)] += 1.0
+    radius = float(np.mean(radii)) if radii else 0.75
+    stats = {"examples": len(examples), "worlds": worlds, "steps": steps,
+             "families": list(families), "radius": radius}  # fmt: skip
+    return MotionModel(turn, speed, start, radius, stats).check()
+
+
+@njit(cache=True)
+def sample_motion(  # type: ignore[no-untyped-def]
+    bodies, segs, n_samples, horizon, seed, turn_cdf, speed_cdf, start_cdf, ahead_edges,
+    speed_edges, clear, cx0, cy0, ch,
+):
+    """``n_samples`` futures of the ``bodies`` (rows x, y, heading, known, speed, radius:
+    :meth:`MotionTracker.rows`) over ``horizon`` steps, drawn from the learnt tables:
+    each step a body turns by a draw of the turn table of the room ahead of it (the
+    distance it could go along its heading before a wall, binned by ``ahead_edges``),
+    takes a speed drawn after its last one, and moves, a wall stopping it. A body whose
+    heading is unknown starts at a uniform heading and a speed drawn from ``start_cdf``.
+
+    ``*_cdf``: cumulative tables (rows of the conditional laws); ``clear``: the distance
+    to the walls on a grid (origin cx0, cy0, side ch), which spares the swept test of a
+    body far from every wall. Returns (n_samples, horizon + 1, d, 2)."""
+    np.random.seed(seed)
+    d = bodies.shape[0]
+    n_turn = turn_cdf.shape[1]
+    n_speed = speed_cdf.shape[1]
+    n_ahead = ahead_edges.shape[0] - 1
+    cny, cnx = clear.shape
+    slack = ch * 0.7072
+    out = np.empty((n_samples, horizon + 1, d, 2))
+    width = 2.0 * math.pi / n_turn
+    for k in range(d):
+        x0 = bodies[k, 0]
+        y0 = bodies[k, 1]
+        rk = bodies[k, 5]
+        known = bodies[k, 3] > 0.5
+        local = local_segments(x0, y0, segs, horizon * speed_edges[-1] + rk + 1e-3)
+        for s in range(n_samples):
+            x = x0
+            y = y0
+            if known:
+                h = bodies[k, 2]
+                v = bodies[k, 4]
+            else:
+                h = 2.0 * math.pi * np.random.random()
+                u = np.random.random()
+                b = 0
+                while b < n_speed - 1 and start_cdf[b] < u:
+                    b += 1
+                v = speed_edges[b] + np.random.random() * (speed_edges[b + 1] - speed_edges[b])
+            out[s, 0, k, 0] = x
+            out[s, 0, k, 1] = y
+            for t in range(horizon):
+                ci = int(math.floor((y - cy0) / ch + 0.5))
+                cj = int(math.floor((x - cx0) / ch + 0.5))
+                room = 1e3
+                if not (0 <= ci < cny and 0 <= cj < cnx and clear[ci, cj] - slack > 4.0 + rk):
+                    room = sweep_one(x, y, math.cos(h), math.sin(h), local, rk)
+                a = 0
+                while a < n_ahead - 1 and room >= ahead_edges[a + 1]:
+                    a += 1
+                u = np.random.random()
+                b = 0
+                while b < n_turn - 1 and turn_cdf[a, b] < u:
+                    b += 1
+                h += -math.pi + (b + np.random.random()) * width
+                sb = 0
+                while sb < n_speed - 1 and v >= speed_edges[sb + 1]:
+                    sb += 1
+                u = np.random.random()
+                b = 0
+                while b < n_speed - 1 and speed_cdf[sb, b] < u:
+                    b += 1
+                v = speed_edges[b] + np.random.random() * (speed_edges[b + 1] - speed_edges[b])
+                dx = math.cos(h)
+                dy = math.sin(h)
+                go = sweep_one(x, y, dx, dy, local, rk)
+                step = min(v, max(go - 1e-6, 0.0))
+                x += step * dx
+                y += step * dy
+                out[s, t + 1, k, 0] = x
+                out[s, t + 1, k, 1] = y
+    return out
+
+
+def motion_errors(
+    model: MotionModel | None,
+    families: Sequence[str] = ("crowd",),
+    worlds: int = 10,
+    steps: int = 100,
+    *,
+    seed: int = 1,
+    horizons: Sequence[int] = (1, 3, 5, 10),
+    samples: int = 32,
+    sensor: RangeSensor | None = None,
+    agent_radius: float = 0.3,
+) -> dict[str, dict[int, float]]:
+    """How far the predicted places of the bodies an agent makes out are from where the
+    simulator's record puts them ``horizons`` steps later, on random walks of worlds the
+    model never saw (``default_rng([seed, k, 13])``): for each body followed with a known
+    heading, matched to the true disc nearest its fit (within 0.3), the mean distance of
+    the model's sample mean (``"model"``) and of the constant-velocity guess from its
+    last two fits (``"constant velocity"``) to the disc's true centre. With ``model``
+    None only the constant-velocity guess is scored."""
+    sensor = sensor or RangeSensor()
+    H = max(horizons)
+    errs: dict[str, dict[int, list[float]]] = {
+        "model": {h: [] for h in horizons}, "constant velocity": {h: [] for h in horizons}}
+    none = np.zeros((0, 2))
+    for k in range(worlds):
+        rng = np.random.default_rng([seed, k, 13])
+        fam = families[k % len(families)]
+        world = random_world(rng) if fam == "star" else sample_world(fam, rng)
+        sim = Simulator.from_world(world, rng, agent_radius=agent_radius, sensor=sensor,
+                                   record=True)  # fmt: skip
+        walk = RandomWalk(seed=rng)
+        tracker = MotionTracker(sensor.n_rays, sensor.max_range, model=model)
+        segs = np.ascontiguousarray(world.segments)
+        grid = np.zeros((1, 1))
+        states: list[tuple[int, NDArray[np.float64], NDArray[np.float64]]] = []
+        blocked = False
+        for t in range(steps + H):
+            static = sensor.scan(world, sim.position, none, np.zeros(0))
+            rows = tracker.update(sim.ranges, static, sim.position)
+            if t < steps and len(rows):
+                truth = sim.centers.copy()
+                states.append((t, rows.copy(), truth))
+            blocked = sim.step(walk(blocked)).blocked
+        traces = np.asarray(sim.traces)  # (T + 1, d, 2): the record, t = 0 first
+        for t, rows, truth in states:
+            known = rows[:, 3] > 0.5
+            if not known.any():
+                continue
+            rows = rows[known]
+            gap = np.linalg.norm(rows[:, None, :2] - truth[None, :, :], axis=2)
+            match = gap.argmin(axis=1)
+            ok = gap[np.arange(len(rows)), match] < 0.3
+            if not ok.any():
+                continue
+            rows, match = rows[ok], match[ok]
+            if model is not None:
+                fut = sample_motion(np.ascontiguousarray(rows), segs, samples, H,  # type: ignore[call-arg]
+                                    k * 1000 + t, *_tables(model), grid, 0.0, 0.0, 1.0)  # fmt: skip
+                mean = fut.mean(axis=0)
+            for h in horizons:
+                if t + h >= len(traces):
+                    continue
+                true = traces[t + h][match]
+                vel = rows[:, 4:5] * np.column_stack([np.cos(rows[:, 2]), np.sin(rows[:, 2])])
+                cv = rows[:, :2] + h * vel
+                errs["constant velocity"][h] += np.linalg.norm(cv - true, axis=1).tolist()
+                if model is not None:
+                    errs["model"][h] += np.linalg.norm(mean[h] - true, axis=1).tolist()
+    return {key: {h: float(np.mean(v)) if v else math.nan for h, v in d.items()}
+            for key, d in errs.items() if key != "model" or model is not None}  # fmt: skip
+
+
+def _tables(model: MotionModel) -> tuple[NDArray[np.float64], ...]:
+    """The cumulative tables and edges :func:`sample_motion` takes, in its order."""
+    return (np.ascontiguousarray(np.cumsum(model.turn_p(), axis=1)),
+            np.ascontiguousarray(np.cumsum(model.speed_p(), axis=1)),
+            np.ascontiguousarray(np.cumsum(model.start_p())), AHEAD_EDGES.copy(),
+            SPEED_EDGES.copy())  # fmt: skip

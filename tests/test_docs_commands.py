@@ -69,6 +69,9 @@ def test_every_command_example_parses_and_finds_its_inputs(page: str, optional: 
     lines = command_lines(page, optional=optional)
     made: list[Path] = []
     for args in lines:
+        if PLACEHOLDER.search(" ".join(args)) and "--scheduler" in args:
+            i = args.index("--scheduler")  # parsed without it: reading it asks the scheduler
+            args = args[:i] + args[i + 2 :]
         try:
             _, params = _parse(args)
         except Exception as exc:  # a usage error: unknown command or option, bad value

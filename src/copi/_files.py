@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import hashlib
 import io
+import json
 import os
 import stat
 import tempfile
@@ -42,9 +43,16 @@ __all__ = [
 ]
 
 # What an output of each kind may replace (by the existing file's content, see file_kind)
+_NPZ_FORMATS = {"copi-capabilities": "capabilities file", "copi-policy": "policy file",
+                "copi-causal-map": "causal map"}
+"""What a copi ``.npz`` holds, by the format its metadata names."""
+
 _KINDS = {
     "results": {"results store"},
-    "npz": {"npz archive"},
+    "npz": {"npz archive", *_NPZ_FORMATS.values()},
+    "capabilities": {"npz archive", "capabilities file"},
+    "policy": {"npz archive", "policy file"},
+    "causal map": {"npz archive", "causal map"},
     "png": {"PNG image"},
     "gif": {"GIF image"},
     "mp4": {"MP4 video"},
@@ -52,6 +60,22 @@ _KINDS = {
     "text": {"text"},
     "directory": {"directory"},
 }
+
+
+def _npz_format(path: Path) -> str | None:
+    """The format a copi ``.npz``'s metadata names, or None (another archive, or one that
+    cannot be read: what it holds is then told by its first bytes only)."""
+    try:
+        with zipfile.ZipFile(path) as zf:
+            info = zf.getinfo("metadata.npy")
+            if info.file_size > 1 << 20:  # a copi file's metadata is a few kilobytes
+                return None
+            with zf.open(info) as fh:
+                meta = np.lib.format.read_array(fh, allow_pickle=False)
+        found = json.loads(str(meta[()])).get("format")
+    except Exception:  # anything unreadable is simply not a copi file
+        return None
+    return found if isinstance(found, str) else None
 
 
 def file_kind(path: str | os.PathLike[str]) -> str | None:
@@ -96,7 +120,7 @@ def file_kind(path: str | os.PathLike[str]) -> str | None:
     if head.startswith(b"SQLite format 3\x00"):
         return "results store"
     if head.startswith(b"PK\x03\x04") or head.startswith(b"PK\x05\x06"):
-        return "npz archive"
+        return _NPZ_FORMATS.get(_npz_format(p) or "", "npz archive")
     if head.startswith(b"\x89PNG"):
         return "PNG image"
     if head.startswith(b"GIF8"):
@@ -174,6 +198,8 @@ def check_outputs(
                 )
         found = file_kind(path)
         if kind == "directory":
+            if found is None and path.exists():  # an empty file is still not a directory
+                found = "empty file"
             if found not in (None, "directory"):
                 raise InvalidArgumentError(
                     f"{path} exists and is not a directory; expected a directory for {label}"
@@ -263,10 +289,13 @@ def _about(exc: OSError, target: Path) -> OSError:
     return OSError(exc.errno, exc.strerror or str(exc), str(target))
 
 
-def write_npz(path: str | os.PathLike[str], arrays: Mapping[str, Any]) -> Path:
+def write_npz(
+    path: str | os.PathLike[str], arrays: Mapping[str, Any], kind: str = "npz"
+) -> Path:
     """Write ``arrays`` as an ``.npz`` (no pickle), atomically (:func:`atomic_write`),
     byte for byte the same for the same arrays: fixed member order and zip timestamps,
-    so that a file's hash names its content."""
+    so that a file's hash names its content. ``kind`` ("capabilities", "policy", "causal
+    map"): what it holds, so that a copi file of another kind there is refused."""
 
     def write(fh: IO[bytes]) -> None:
         with zipfile.ZipFile(fh, "w", compression=zipfile.ZIP_DEFLATED) as zf:
@@ -277,7 +306,7 @@ def write_npz(path: str | os.PathLike[str], arrays: Mapping[str, Any]) -> Path:
                 with zf.open(info, "w", force_zip64=True) as member:
                     np.lib.format.write_array(member, np.asarray(arr), allow_pickle=False)
 
-    return atomic_write(path, write, "npz")
+    return atomic_write(path, write, kind)
 
 
 def file_sha(path: str | os.PathLike[str]) -> str:

@@ -90,6 +90,12 @@ def _array(
         raise error(f"{p}: member {name!r} is not an array ({str(exc).splitlines()[0]})") from None
     if dtype.hasobject:
         raise error(f"{p}: member {name!r} holds Python objects, which copi never loads")
+    if dtype.itemsize == 0 or dtype.kind not in "biufcSU":
+        raise error(f"{p}: member {name!r} holds {dtype} items; a copi {what} holds "
+                    "numbers and text only")  # fmt: skip
+    if any(int(d) < 0 for d in shape) or len(shape) > 8:
+        raise error(f"{p}: member {name!r} has shape {shape}; expected at most 8 sizes, "
+                    "each >= 0")  # fmt: skip
     count = 1
     for d in shape:
         count *= int(d)

@@ -12,11 +12,18 @@ import re
 import sys
 import threading
 import warnings
+from pathlib import Path
 from typing import Any, Generic, TypeVar
 
 from copi.errors import CopiError, InvalidArgumentError, PluginWarning
 
-__all__ = ["Registry", "failed_entry_points", "load_entry_points", "origin_of"]
+__all__ = [
+    "Registry",
+    "failed_entry_points",
+    "load_entry_points",
+    "origin_of",
+    "replaced_origin",
+]
 
 _LOADED: set[tuple[str, str, str]] = set()
 _FAILED: dict[str, list[str]] = {}
@@ -68,13 +75,54 @@ def _distributions() -> dict[str, list[str]]:
     return dict(importlib.metadata.packages_distributions())
 
 
+def _defining_module(thing: Any) -> str:
+    """The module that defines ``thing``: its ``__module__``, unless that is the standard
+    library's (a class made with ``type()`` under an ABC says ``abc``), in which case the
+    module of the first function it defines itself."""
+    module_name = getattr(thing, "__module__", None) or type(thing).__module__
+    top = module_name.split(".")[0]
+    if top in sys.stdlib_module_names or top == "builtins":
+        for value in vars(thing).values() if isinstance(thing, type) else ():
+            func = getattr(value, "__func__", value)
+            mod = getattr(func, "__module__", None)
+            std = mod is None or mod.split(".")[0] in sys.stdlib_module_names
+            if inspect.isfunction(func) and not std:
+                return str(mod)
+    return str(module_name)
+
+
+def _source_files(module_name: str) -> list[Path]:
+    """The source files a module's results may depend on: every ``.py`` file of its
+    top-level package, or for a module of its own, it and the modules loaded from its
+    directory (a helper it imports), unless that directory is an installation's shared
+    one (site-packages), where only the module itself is its own."""
+    top = module_name.split(".")[0]
+    root = sys.modules.get(top)
+    where = getattr(root, "__path__", None)
+    if where:  # a package: all of it
+        return sorted(p for d in where for p in Path(d).rglob("*.py"))
+    file = getattr(sys.modules.get(module_name), "__file__", None)
+    if not file:
+        return []
+    here = Path(file).resolve()
+    if any(part in ("site-packages", "dist-packages") for part in here.parts):
+        return [here]
+    mine = {here}
+    for mod in list(sys.modules.values()):
+        f = getattr(mod, "__file__", None)
+        if f and f.endswith(".py") and Path(f).resolve().parent == here.parent:
+            mine.add(Path(f).resolve())
+    return sorted(mine)
+
+
 def origin_of(thing: Any, kind: str) -> dict[str, str]:
     """Where a registered method's factory or a family's sampler comes from, for the
     identity of every run of it (``kind``: "method" or "family" names the keys): nothing
     for copi's own (copi's version is in every identity already); otherwise its package
-    and version (``KIND_origin``) and a hash of the source of the module that defines it
-    (``KIND_code``), so that a run of another package's thing of the same name, or of its
-    code changed since, never resumes into the stored one.
+    and version (``KIND_origin``) and a hash of the source of every module of its package
+    (``KIND_code``: for a module of its own, it and the modules beside it), so that a run
+    of another package's thing of the same name, or of its code changed since (in any
+    of its modules), never resumes into the stored one.
 
     Examples
     --------
@@ -82,27 +130,44 @@ def origin_of(thing: Any, kind: str) -> dict[str, str]:
     >>> origin_of(DWA, "method")
     {}
     """
-    module_name = getattr(thing, "__module__", None) or type(thing).__module__
+    module_name = _defining_module(thing)
     if module_name == "copi" or module_name.startswith("copi."):
         return {}
     top = module_name.split(".")[0]
     dists = _distributions().get(top, [])
+    if not dists:  # a package installed (or put on the path) since the first look
+        _distributions.cache_clear()
+        dists = _distributions().get(top, [])
     package = module_name
     if dists:
         try:
             package = f"{dists[0]} {importlib.metadata.version(dists[0])}"
         except importlib.metadata.PackageNotFoundError:  # pragma: no cover - half-installed
             package = dists[0]
-    module = sys.modules.get(module_name)
-    try:
-        source = inspect.getsource(module) if module is not None else inspect.getsource(thing)
-    except (OSError, TypeError):  # defined where no source is kept (an interpreter session)
+    digest = hashlib.sha256()
+    files = _source_files(module_name)
+    for f in files:
+        try:
+            digest.update(f.name.encode() + b"\0" + f.read_bytes() + b"\0")
+        except OSError:  # a file gone since it was imported: its name still counts
+            digest.update(f.name.encode())
+    if not files:  # defined where no file is kept (an interpreter session)
         try:
             source = inspect.getsource(thing)
         except (OSError, TypeError):
             source = repr(getattr(thing, "__qualname__", thing))
-    code = hashlib.sha256(source.encode()).hexdigest()[:16]
-    return {f"{kind}_origin": package, f"{kind}_code": code}
+        digest.update(source.encode())
+    return {f"{kind}_origin": package, f"{kind}_code": digest.hexdigest()[:16]}
+
+
+def replaced_origin(thing: Any, kind: str) -> dict[str, str]:
+    """The identity of copi's own ``thing`` registered over another of copi's names (a
+    sampler of one family as another, a method's class with other parameters): where it
+    is defined, so that such a run never resumes into the name's own."""
+    module_name = _defining_module(thing)
+    what = getattr(thing, "__qualname__", None) or type(thing).__qualname__
+    return {f"{kind}_origin": "copi (registered over copi's own)",
+            f"{kind}_code": f"{module_name}:{what}"}  # fmt: skip
 
 
 _NAME = re.compile(r"^[a-z0-9][a-z0-9_.-]*$")
@@ -125,6 +190,7 @@ class Registry(Generic[T]):
         self._own: frozenset[str] = frozenset()
         self._originals: dict[str, T] = {}
         self._replaced: set[str] = set()
+        self._scanned = False
 
     def add(self, name: str, item: T, *, same: bool, replace: bool = False) -> T:
         """Register ``item`` as ``name``; a name taken is refused unless ``replace`` or
@@ -182,8 +248,13 @@ class Registry(Generic[T]):
             self._items.pop(name, None)
 
     def get(self, name: str) -> T | None:
-        """The item of ``name``, loading the entry points not loaded yet when it is not
-        registered; None when no one registers it."""
+        """The item of ``name``, after the entry points have been loaded once in this
+        process (another package may register over one of copi's own names: every
+        command must see the same registration), and again when ``name`` is not
+        registered (a package installed since); None when no one registers it."""
+        if not self._scanned:
+            self._scanned = True
+            load_entry_points(self.group)
         item = self._items.get(name)
         if item is None:
             load_entry_points(self.group)
@@ -200,5 +271,6 @@ class Registry(Generic[T]):
 
     def names(self) -> tuple[str, ...]:
         """Every registered name: copi's own first, in the order registered."""
+        self._scanned = True
         load_entry_points(self.group)
         return tuple(self._items)

@@ -212,6 +212,9 @@ def check_agent(
         )
     own = SENSING_LEVELS.index(first.sensing)
     chosen = list(SENSING_LEVELS[own:]) if levels is None else list(levels)
+    if not chosen:
+        raise AgentCheckError(f"agent {first.name!r}: levels must name at least one level to "
+                              "check it at; got none")  # fmt: skip
     for lv in chosen:
         check_sensing(lv, first.sensing, method=first.name)
     from copi.runs import run_episode

@@ -226,8 +226,8 @@ def test_a_scheduler_that_never_answers_is_given_up_on_in_seconds(
     for conn in held:
         conn.close()
     server.close()
-    assert time.monotonic() - t0 < 10 and "none answered within 8 s" in msg
-    assert not (tmp_path / "b" / "benchmark.sqlite").exists()
+    assert time.monotonic() - t0 < 10 and "none answered within 5 s" in msg
+    assert not (tmp_path / "b").exists()  # refused while the command line was read
 
 
 def _tampered(src: Path, dst: Path, change: object) -> Path:

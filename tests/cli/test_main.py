@@ -190,7 +190,7 @@ def test_evaluate_report_and_bad_inputs(tmp_path: Path, capsys: pytest.CaptureFi
         (["--method", "astar"], "method must be one of copi-faithful, copi-extended, copi-learnt, copi-learnt-priors"),
         (
             ["--sensing", "psychic"],
-            "sensing level must be one of sensor, map, oracle, future; got 'psychic'",
+            "--sensing must be sensor, map or oracle; got 'psychic'",
         ),
         (
             ["--method", "replan", "--sensing", "map"],
@@ -296,8 +296,14 @@ def test_reproduce_into_a_directory_of_another_run_says_what_to_do(
     from copi.results import ResultsStore
 
     def clash(output: Path, quick: bool, workers: int, seed: int, tasks: object) -> None:
+        from copi.results import EpisodeRow
+
         with ResultsStore(output / "experiment1.sqlite") as store:  # as a --quick run left it
             store.begin("a", "navigation", "copi-faithful", {"worlds": 100})
+            store.add("a", "navigation", "copi-faithful", EpisodeRow(
+                episode=0, world="w", seed=0, success=True, reached=True, collided=False,
+                timed_out=False, steps=3, contacts=0, path_length=3.0, optimal_length=3.0,
+                excess=0.0, decision_us=1.0, strategy_us=0.0, unfamiliar=0.0, no_policy=0))
             store.begin("b", "navigation", "copi-faithful", {"worlds": 1549})
 
     monkeypatch.setattr(commands, "_reproduce", clash)

@@ -136,3 +136,143 @@ def test_a_family_registered_over_copi_s_own_never_resumes_its_run(
     finally:
         unregister_family("star")
     assert family_spec("star") is original and not family_replaced("star")
+
+
+TYPED = '''
+import numpy as np
+from copi.core import Agent
+from {helper} import SPEED
+
+
+def _reset(self, task):
+    pass
+
+
+def _act(self, obs):
+    return np.array([SPEED, 0.0])
+
+
+Typed = type("Typed", (Agent,), {{"reset": _reset, "act": _act}})
+'''
+
+
+@pytest.mark.parametrize("what", ["the class's module", "a module it imports"])
+def test_a_class_made_with_type_and_its_helpers_are_part_of_its_identity(
+    what: str, tmp_path: Path, capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:  # fmt: skip
+    """A class made with ``type()`` under an ABC says it comes from ``abc``; its
+    identity is its own module's, and every module beside it (a helper it imports)."""
+    (tmp_path / "typed_helper.py").write_text("SPEED = 1.0\n")
+    module = tmp_path / "typed_plugin.py"
+    module.write_text(TYPED.format(helper="typed_helper"))
+    monkeypatch.syspath_prepend(str(tmp_path))
+    plugin = importlib.import_module("typed_plugin")
+    try:
+        assert plugin.Typed.__module__ == "abc"  # what type() under ABCMeta records
+        register_method("typed", plugin.Typed, summary="typed")
+        origin = method_spec("typed").origin
+        assert origin["method_origin"] == "typed_plugin"
+        out = tmp_path / "run"
+        code, _, err = _bench(out, capsys, "typed@sensor")
+        assert code == 0, err
+        if what == "a module it imports":
+            (tmp_path / "typed_helper.py").write_text("SPEED = 0.5\n")
+        else:
+            module.write_text(TYPED.format(helper="typed_helper") + "# v2\n")
+        register_method("typed", plugin.Typed, summary="typed", replace=True)
+        assert method_spec("typed").origin["method_code"] != origin["method_code"]
+        msg = _one_line_error(*_bench(out, capsys, "typed@sensor")[::2])
+        assert "run of method 'typed' from typed_plugin, whose code changed since" in msg
+    finally:
+        unregister_method("typed")
+        for m in ("typed_plugin", "typed_helper"):
+            sys.modules.pop(m, None)
+
+
+def test_copi_s_own_code_under_another_of_its_names_is_another_run_and_said_so(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from copi.baselines import VFH
+    from copi.cli._common import out as console
+
+    code, _, err = _bench(tmp_path, capsys, "straight@map")
+    assert code == 0, err
+    polygon = family_spec("polygon").sampler
+    register_family("star", polygon, summary="polygon as star", replace=True)
+    register_method("dwa", VFH, summary="vfh as dwa", replace=True)
+    try:
+        msg = _one_line_error(*_bench(tmp_path, capsys, "straight@map")[::2])
+        assert "run of family 'star' from copi's own there, from copi (registered over " \
+               "copi's own) now" in msg  # fmt: skip
+        wide = console._width
+        console.width = 400
+        try:
+            code, text, _ = run(["list"], capsys)
+        finally:
+            console._width = wide
+        flat = " ".join(text.split())
+        assert "polygon as star [registered over copi's own]" in flat
+        assert "vfh as dwa [registered over copi's own]" in flat
+    finally:
+        unregister_family("star")
+        unregister_method("dwa")
+
+
+def test_an_evaluation_and_a_pursuit_of_a_method_registered_again_are_other_runs(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from copi.experiments.pursuit import PursuitConfig
+
+    store = tmp_path / "e.sqlite"
+    args = ["evaluate", "--method", "dwa", "--worlds", "2", "-o", str(store)]
+    code, _, err = run(args, capsys)
+    assert code == 0, err
+    game = PursuitConfig(None, evader="dwa", games=2, horizon=30)
+    before = game.identity()
+    register_method("dwa", DWA, params={"margin": 0.1}, summary="dwa, closer",
+                    replace=True)  # fmt: skip
+    try:
+        msg = _one_line_error(*run(args, capsys)[::2])
+        assert "run of method 'dwa' from copi's own there, from copi (registered over " \
+               "copi's own) now" in msg  # fmt: skip
+        assert game.identity() != before
+    finally:
+        unregister_method("dwa")
+    assert game.identity() == before
+
+
+def test_a_replacement_by_entry_point_is_what_every_command_runs(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """An installed package registering over ``dwa``: even a command that only asks for
+    ``dwa`` (never listing the methods) gets the package's, as ``copi list`` says."""
+    import copi._plugins
+
+    (tmp_path / "over_dwa.py").write_text(
+        "from copi.methods import register_method\n"
+        "from copi.baselines import Straight\n\n\n"
+        "class Over(Straight):\n"
+        "    pass\n\n\n"
+        "def register():\n"
+        "    register_method('dwa', Over, summary='over dwa', replace=True)\n")  # fmt: skip
+    info = tmp_path / "over_dwa-0.1.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: over-dwa\nVersion: 0.1\n")
+    (info / "entry_points.txt").write_text("[copi.methods]\nover = over_dwa:register\n")
+    (info / "top_level.txt").write_text("over_dwa\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    registry = copi._plugins  # the registry scans entry points once, on its first question
+    from copi.methods._registry import REGISTRY
+
+    monkeypatch.setattr(REGISTRY, "_scanned", False)
+    copi._plugins._LOADED.clear()
+    try:
+        spec = method_spec("dwa")
+        assert spec.summary == "over dwa" and method_replaced("dwa")
+        assert spec.input_hashes()["method_origin"] == "over-dwa 0.1"
+    finally:
+        unregister_method("dwa")
+        sys.modules.pop("over_dwa", None)
+        registry._LOADED.clear()
+    assert method_spec("dwa").factory is DWA

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import re
 import shutil
 from pathlib import Path
 from typing import Any
@@ -94,11 +95,32 @@ def _json(ck: Path, change: Any) -> None:
     (ck / "last.json").write_text(json.dumps(change(meta)))
 
 
+def _text(ck: Path, old: str, new: str) -> None:
+    """Replace ``old`` in last.json's text (for what json.dumps cannot write: an integer
+    of thousands of digits)."""
+    text = (ck / "last.json").read_text()
+    assert old in text
+    (ck / "last.json").write_text(text.replace(old, new, 1))
+
+
+def _sign(ck: Path) -> None:
+    """last.json's digest made that of last.pt as it now is: a checkpoint whole but
+    wrong within."""
+    digest = hashlib.sha256((ck / "last.pt").read_bytes()).hexdigest()
+    _json(ck, lambda m: {**m, "last_pt_sha256": digest})
+
+
+def _pt(ck: Path, data: bytes) -> None:
+    (ck / "last.pt").write_bytes(data)
+    _sign(ck)
+
+
 def _tensors(ck: Path, change: Any) -> None:
     import torch
 
     t = torch.load(ck / "last.pt", weights_only=True)
     torch.save(change(t), ck / "last.pt")
+    _sign(ck)
 
 
 def _nan(t: dict[str, Any]) -> dict[str, Any]:
@@ -119,21 +141,93 @@ class _Thing:  # something weights_only refuses to unpickle
     pass
 
 
+def _point(m: dict[str, Any], i: int, **change: Any) -> dict[str, Any]:
+    curve = [dict(c) for c in m["curve"]]
+    curve[i].update(change)
+    return {**m, "curve": curve}
+
+
+def _env(m: dict[str, Any], **change: Any) -> dict[str, Any]:
+    return {**m, "envs": [{**m["envs"][0], **change}, *m["envs"][1:]]}
+
+
+_LONG = "9" * 5000
+# The checkpoint (the fixture's): 768 steps, 2 rollouts of 3 envs x 128 steps, 2 epochs
+# each (4 updates), in a run of 1,536 steps; its curve one point.
 CASES = [
     (lambda ck: (ck / "last.json").write_text("{junk"), "last.json is not JSON"),
     (lambda ck: (ck / "last.json").write_text(""), "last.json is not JSON"),
     (lambda ck: (ck / "last.json").write_text("[1, 2]"), "last.json is not an object"),
+    # an integer longer than Python converts: named where it is, whatever the field
+    (lambda ck: _text(ck, '"updates": 4', '"updates": ' + _LONG),
+     "last.json's updates is an integer of 5,000 digits; expected at most 40"),
+    (lambda ck: _text(ck, '"seed": 0', '"seed": -' + _LONG),
+     "last.json's config.seed is an integer of 5,000 digits"),
+    (lambda ck: _text(ck, '"numpy_rng": ["MT19937", [', '"numpy_rng": ["MT19937", [' + _LONG + ","),
+     "last.json's numpy_rng[1][0] is an integer of 5,000 digits"),
     (lambda ck: _json(ck, lambda m: {k: v for k, v in m.items() if k != "curve"}),
-     "its learning curve is missing"),
-    (lambda ck: _json(ck, lambda m: {**m, "steps": 10**12}), "it claims 1000000000000 steps"),
-    (lambda ck: _json(ck, lambda m: {**m, "steps": -5}), "it claims -5 steps"),
-    (lambda ck: _json(ck, lambda m: {**m, "seconds": float("nan")}), "its wall time is nan"),
+     "last.json's curve is missing; expected a learning curve of 1 to 2 points"),
+    (lambda ck: _json(ck, lambda m: {**m, "curve": []}), "last.json's curve is []"),
+    (lambda ck: _json(ck, lambda m: {**m, "steps": 10**12}),
+     "last.json's steps is 1000000000000; expected a whole number of rollouts of 384 steps "
+     "(3 envs x 128), at most the run's 1,536"),
+    (lambda ck: _json(ck, lambda m: {**m, "steps": -5}), "last.json's steps is -5"),
+    (lambda ck: _json(ck, lambda m: {**m, "steps": 1000}), "last.json's steps is 1000"),
+    (lambda ck: _json(ck, lambda m: {**m, "steps": 1920}), "last.json's steps is 1920"),
+    (lambda ck: _json(ck, lambda m: {**m, "steps": 768.0}), "last.json's steps is 768.0"),
+    (lambda ck: _json(ck, lambda m: {**m, "steps": 0}), "last.json's steps is 0"),
+    (lambda ck: _json(ck, lambda m: {**m, "updates": "x"}),
+     "last.json's updates is 'x'; expected 4 (2 rollouts of 2 epochs)"),
+    (lambda ck: _json(ck, lambda m: {**m, "updates": None}), "last.json's updates is None"),
+    (lambda ck: _json(ck, lambda m: {k: v for k, v in m.items() if k != "updates"}),
+     "last.json's updates is missing"),
+    (lambda ck: _json(ck, lambda m: {**m, "updates": 1e300}), "last.json's updates is 1e+300"),
+    (lambda ck: _json(ck, lambda m: {**m, "updates": -7}), "last.json's updates is -7"),
+    (lambda ck: _json(ck, lambda m: {**m, "updates": 6}), "last.json's updates is 6"),
+    (lambda ck: _json(ck, lambda m: {**m, "updates": True}), "last.json's updates is True"),
+    (lambda ck: _json(ck, lambda m: {**m, "seconds": float("nan")}),
+     "last.json's seconds is nan; expected a wall time in 0 .. 31,536,000 s (a year)"),
+    (lambda ck: _json(ck, lambda m: {**m, "seconds": 1e308}), "last.json's seconds is 1e+308"),
+    (lambda ck: _json(ck, lambda m: {**m, "seconds": -1}), "last.json's seconds is -1"),
+    (lambda ck: _json(ck, lambda m: {**m, "seconds": 4e7}), "last.json's seconds is 40000000.0"),
+    (lambda ck: _json(ck, lambda m: _point(m, 0, success=7)),
+     "last.json's curve[0].success is 7; expected a fraction of episodes in [0, 1]"),
+    (lambda ck: _json(ck, lambda m: _point(m, 0, success=-0.5)),
+     "last.json's curve[0].success is -0.5"),
+    (lambda ck: _json(ck, lambda m: _point(m, 0, success="all")),
+     "last.json's curve[0].success is 'all'"),
+    (lambda ck: _json(ck, lambda m: _point(m, 0, seconds=1e308)),
+     "last.json's curve[0].seconds is 1e+308"),
+    (lambda ck: _json(ck, lambda m: _point(m, 0, steps=1152)),
+     "last.json's curve[0].steps is 1152; expected a whole number of rollouts of 384 steps, "
+     "more than the point before's 0 and at most the checkpoint's 768"),
+    (lambda ck: _json(ck, lambda m: _point(m, 0, steps=384)),
+     "last.json's curve[0].steps is 384; expected the checkpoint's steps, 768"),
+    (lambda ck: _json(ck, lambda m: {**m, "curve": [m["curve"][0], m["curve"][0]]}),
+     "last.json's curve[1].steps is 768; expected a whole number of rollouts of 384 steps, "
+     "more than the point before's 768"),
+    (lambda ck: _json(ck, lambda m: {**m, "curve": [{"steps": 768}]}),
+     "last.json's curve[0] is {'steps': 768}; expected a point of steps, seconds and success"),
     (lambda ck: _json(ck, lambda m: {**m, "envs": m["envs"][:1]}),
-     "another number of environments"),
-    (lambda ck: (ck / "last.pt").write_bytes((ck / "last.pt").read_bytes()[:300]),
-     "last.pt cannot be read"),
-    (lambda ck: (ck / "last.pt").write_bytes(b"junk" * 100), "last.pt cannot be read"),
-    (lambda ck: (ck / "last.pt").write_bytes(b""), "last.pt cannot be read"),
+     "last.json's envs is [{'drawn_from'"),
+    (lambda ck: _json(ck, lambda m: _env(m, ended="exploded")),
+     "last.json's envs[0].ended is 'exploded'; expected null, terminated or truncated"),
+    (lambda ck: _json(ck, lambda m: _env(m, drawn_from={"bit_generator": "MT19937"})),
+     "last.json's envs[0].drawn_from is {'bit_generator': 'MT19937'}; expected a PCG64"),
+    (lambda ck: _json(ck, lambda m: {**m, "numpy_rng": m["numpy_rng"][:2]}),
+     "last.json's numpy_rng is ['MT19937'"),
+    (lambda ck: _json(ck, lambda m: {**m, "python_rng": [3, [], None]}),
+     "last.json's python_rng is [3, [], None]; expected Python's random state"),
+    (lambda ck: _json(ck, lambda m: {**m, "config": {**m["config"], "steps": "x"}}),
+     "last.json's config.steps is 'x'"),
+    (lambda ck: _json(ck, lambda m: {**m, "last_pt_sha256": 7}),
+     "last.json's last_pt_sha256 is 7; expected a SHA-256 digest"),
+    # last.pt of another moment than last.json's (a write cut short between the two)
+    (lambda ck: (ck / "last.pt").write_bytes((ck / "last.pt").read_bytes() + b"\0"),
+     "last.pt is not the file last.json was written with"),
+    (lambda ck: _pt(ck, (ck / "last.pt").read_bytes()[:300]), "last.pt cannot be read"),
+    (lambda ck: _pt(ck, b"junk" * 100), "last.pt cannot be read"),
+    (lambda ck: _pt(ck, b""), "last.pt cannot be read"),
     (lambda ck: _tensors(ck, lambda t: _Thing()), "last.pt cannot be read"),
     (lambda ck: _tensors(ck, lambda t: {"params": t["params"]}), "lacks parts of a checkpoint"),
     (lambda ck: _tensors(ck, _nan), "holds NaN or infinity"),
@@ -149,6 +243,21 @@ def test_a_spoilt_checkpoint_is_refused_in_one_line(
     ck = tmp_path / "ck"
     shutil.copytree(checkpoint, ck)
     spoil(ck)
-    with pytest.raises(InvalidArgumentError, match=message) as err:
+    before = {p.name: p.read_bytes() for p in ck.iterdir()}
+    with pytest.raises(InvalidArgumentError, match=re.escape(message)) as err:
         _train(tmp_path / "p.npz", ck)
     assert "\n" not in str(err.value) and not (tmp_path / "p.npz").exists()
+    assert str(ck) in str(err.value)
+    assert {p.name: p.read_bytes() for p in ck.iterdir()} == before  # left as it was
+
+
+def test_a_checkpoint_without_the_digest_of_last_pt_resumes(checkpoint: Path,
+                                                             tmp_path: Path) -> None:  # fmt: skip
+    """Checkpoints written before last.json held last.pt's digest resume as before."""
+    ck = tmp_path / "ck"
+    shutil.copytree(checkpoint, ck)
+    _json(ck, lambda m: {k: v for k, v in m.items() if k != "last_pt_sha256"})
+    resumed: list[int] = []
+    summary = _train(tmp_path / "p.npz", ck, resumed=resumed.append)
+    assert resumed == [768] and summary["steps"] == 1536
+    assert "last_pt_sha256" in json.loads((ck / "last.json").read_text())

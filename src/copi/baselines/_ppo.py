@@ -278,7 +278,7 @@ def save_policy(policy: PolicyWeights, path: str | os.PathLike[str]) -> Path:
             "layers": len(policy.layers), "n_rays": policy.n_rays,
             "max_range": policy.max_range, "activation": "tanh", "info": policy.info}  # fmt: skip
     arrays["metadata"] = np.array(json.dumps(meta, sort_keys=True))
-    return write_npz(path, arrays)
+    return write_npz(path, arrays, "policy")
 
 
 def load_policy(path: str | os.PathLike[str]) -> PolicyWeights:

@@ -240,7 +240,21 @@ def seed_option(what: str = "the episodes") -> Any:
 
 Seed = Annotated[int, seed_option()]
 Workers = Annotated[int, typer.Option("--workers", min=1, max=512, help="Local processes.")]
-Scheduler = Annotated[str | None, typer.Option("--scheduler", help=SCHEDULER_HELP)]
+def _reach_scheduler(value: str | None) -> str | None:
+    """The scheduler, once it has answered: asked while the command line is read, so that
+    one that cannot be reached is refused before anything is written (no directory, no
+    store, no capabilities learnt for nothing)."""
+    if value is not None:
+        from copi.runs import make_executor
+
+        with make_executor(1, value):
+            pass
+    return value
+
+
+Scheduler = Annotated[
+    str | None, typer.Option("--scheduler", help=SCHEDULER_HELP, callback=_reach_scheduler)
+]
 Preset = Annotated[
     str | None,
     typer.Option(

@@ -10,7 +10,7 @@ from typing import Annotated
 
 import typer
 
-from copi._files import check_outputs
+from copi._files import check_outputs, check_writable
 from copi.cli._common import (
     Guard,
     Method,
@@ -109,6 +109,10 @@ def evaluate_command(
 
     if output is None:
         raise CopiError("evaluate needs -o/--output: the results file to write")
+    if sensing not in ("sensor", "map", "oracle"):  # "future" is the clairvoyant bound's
+        raise CopiError(f"--sensing must be sensor, map or oracle; got {sensing!r} (level "
+                        "future belongs to the clairvoyant bound: copi benchmark --methods "
+                        "clairvoyant)")  # fmt: skip
     check_outputs({"the results store": (output, "results")}, inputs=[capabilities, world_file])
     caps = _load_capabilities(capabilities)
     chosen = resolve(preset_name=preset, method=method, capabilities=caps,
@@ -385,6 +389,8 @@ def lifelong_command(
         from_maps=None if from_maps is None else str(from_maps),
     )  # fmt: skip
     config = config.resolved()  # refuses bad inputs (capabilities, maps) before writing
+    if maps is not None:  # made before the store, so that a path that cannot be leaves none
+        check_writable(maps, "the maps' directory")
     output.parent.mkdir(parents=True, exist_ok=True)
     _with_progress(
         "lifelong: lives",
@@ -411,7 +417,8 @@ def report_command(
     for r in results:
         if not r.exists():
             raise InvalidArgumentError(f"{r}: no such results file")
-        ResultsStore(r, readonly=True).close()  # refused before anything is written
+        with ResultsStore(r, readonly=True) as store:  # refused before anything is written
+            store.runs()  # (a damaged run's configuration too)
     check_outputs(
         {"the report's directory": (output, "directory"),
          "the report": (output / "report.md", "text")},
@@ -474,6 +481,8 @@ def list_command() -> None:
             from_ = next(v for k, v in origin.items() if k.endswith("_origin"))
             text.append(f" [from {from_}" + ("; registered over copi's own]" if replaced
                                             else "]"), style="italic")  # fmt: skip
+        elif replaced:  # copi's own code, registered over another of copi's names
+            text.append(" [registered over copi's own]", style="italic")
         return text
 
     table = Table("method", "needs", "levels", "extra", "what it is", title="methods")

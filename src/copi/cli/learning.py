@@ -136,7 +136,7 @@ def learn_command(
         probe_label=probe_label,
         safety_static=safety_static,
     )
-    check_outputs({"the capabilities file": (output, "npz")})
+    check_outputs({"the capabilities file": (output, "capabilities")})
     output.parent.mkdir(parents=True, exist_ok=True)
     with progress() as bar:
         tasks: dict[str, object] = {}

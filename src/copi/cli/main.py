@@ -83,6 +83,9 @@ def _ctrl_c_inside(exc: BaseException) -> KeyboardInterrupt | None:
     return None
 
 
+_PATH_OPTIONS = frozenset({"-o", "--output", "--checkpoints", "--maps", "--from-maps"})
+"""Options naming a directory or a file to write, where "." is a sensible value."""
+
 _NAMED = ("evaluate", "benchmark", "watch", "lifelong", "learn", "pursuit")
 """Commands whose --help ends with the registered methods, families and presets."""
 
@@ -95,9 +98,12 @@ def _run(argv: list[str] | None) -> None:
         # an empty value ("-o ''") would be read as the current directory: nothing of
         # copi's takes an empty name, so it is a slip, refused before anything is written
         if arg == "" or (arg.startswith("--") and arg.endswith("=")):
-            where = arg[:-1] if arg else (args[i - 1] if i else "the command")
-            raise CopiError(f"an empty value for {where}: give a name (or . for the "
-                            "current directory)")  # fmt: skip
+            option = arg[:-1] if arg else (args[i - 1] if i and args[i - 1][:1] == "-" else "")
+            if not option:
+                raise CopiError(f"an empty argument{' after ' + args[i - 1] if i else ''}: "
+                                "give a value")  # fmt: skip
+            here = " (or . for the current directory)" if option in _PATH_OPTIONS else ""
+            raise CopiError(f"an empty value for {option}: give one{here}")
     if ("--help" in args or "-h" in args) and args and args[0] in _NAMED:
         # the registry imports every method: only when help is asked for
         from copi.cli._common import names_epilog

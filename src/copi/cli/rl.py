@@ -51,13 +51,14 @@ def train_command(
     Writes the policy (numpy weights, run by the methods ppo and ppo-guard), its
     learning curve on fixed validation episodes (.json, .png). Needs the extra rl."""
     from copi.errors import InvalidArgumentError
-    from copi.rl import Reward, TrainConfig, train
+    from copi.rl import Reward, TrainConfig, check_apart, train
 
-    check_outputs({"the policy": (output, "npz"),
+    check_outputs({"the policy": (output, "policy"),
                    "the learning curve": (output.with_suffix(".json"), "json"),
                    "the learning curve's figure": (output.with_suffix(".png"), "png")}
                   | ({} if checkpoints is None
                      else {"the checkpoints' directory": (checkpoints, "directory")}))  # fmt: skip
+    check_apart(output, checkpoints)
     try:
         widths = tuple(int(w) for w in net.split(","))
     except ValueError:

@@ -55,9 +55,13 @@ def world_show(
     gif: Annotated[bool, typer.Option("--gif", help="Also animate each walk as a GIF.")] = False,
 ) -> None:
     """Draw each world with a random-walk episode (PNG per world, plus worlds.png)."""
+    from copi._validation import check_count
     from copi.reports import save_episode_gif, save_episode_png, save_overview_png
     from copi.world import load_worlds, random_walk_episodes
 
+    check_count(steps, "--steps", 10_000)
+    if gif:  # every frame of a GIF is held in memory until it is written
+        check_count(steps, "--steps with --gif", 2_000)
     worlds = load_worlds(world_file)
     pictures = {
         f"the picture of {w.name}": (output / f"{safe_name(w.name)}{suffix}", suffix[1:])

@@ -29,10 +29,10 @@ import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
 
-from copi._validation import check_count, positive_int
+from copi._rng import check_seed
 from copi.baselines import direction_frame, features, observation_size, to_world
 from copi.core import Observation, check_sensing
-from copi.errors import InvalidArgumentError
+from copi.errors import InvalidArgumentError, InvalidWorldError
 from copi.games import ChauffeurGame
 from copi.online import Steering
 from copi.runs import draw_episode, make_task
@@ -46,7 +46,20 @@ EPISODES_PER_FAMILY = 1000
 """Training episodes per family: episodes 0 .. 999 of the training seed, each drawn (and
 its static route planned) once per process, then copied at each reset (a reset costs
 0.2 ms instead of 15)."""
+MAX_STEPS = 1_000_000
+"""The longest episode :class:`LocalPolicyEnv` runs (``max_steps``), in steps."""
 _POOL: dict[tuple[str, int, int], Any] = {}
+
+
+def _names(value: Any, name: str, what: str) -> tuple[str, ...]:
+    """``value`` as a non-empty tuple of strings; one clear error otherwise (a lone string
+    would be read letter by letter)."""
+    if isinstance(value, str) or not isinstance(value, tuple | list) or not value or not all(
+        isinstance(v, str) for v in value
+    ):
+        raise InvalidArgumentError(f"{name} must be a non-empty tuple of {what} names; got "
+                                   f"{value!r}")  # fmt: skip
+    return tuple(value)
 
 
 @dataclass(frozen=True)
@@ -72,12 +85,26 @@ class LocalPolicyEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
 
     Parameters
     ----------
-    families : names of world families (episodes of the training seed).
-    levels : sensing levels to draw from ("sensor", "map").
-    task : "navigation" or "chauffeur" (the evader of the homicidal chauffeur).
-    reward : Reward
-    max_steps : steps before an episode is truncated.
-    seed_of_episodes : the seed whose episodes are drawn (default :data:`TRAINING_SEED`).
+    families : tuple of str
+        Names of registered world families (at least one; episodes of the training seed).
+    levels : tuple of str
+        Sensing levels to draw from, each "sensor" or "map" (at least one; the chauffeur
+        task runs at "map" whatever they are).
+    task : str
+        "navigation" or "chauffeur" (the evader of the homicidal chauffeur).
+    reward : Reward, optional
+        The shaped reward's weights (default :class:`Reward`'s).
+    max_steps : int
+        Steps before an episode is truncated, in 1 .. :data:`MAX_STEPS`.
+    seed_of_episodes : int
+        The seed whose episodes are drawn, in 0 .. 2**63 - 1 (default
+        :data:`TRAINING_SEED`).
+
+    Raises
+    ------
+    InvalidArgumentError
+        For any argument outside these (in the constructor, before any episode is drawn);
+        at a reset, for a family whose sampler raises or that has no valid episode.
     """
 
     metadata = {"render_modes": []}
@@ -94,22 +121,29 @@ class LocalPolicyEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
     ) -> None:
         if task not in ("navigation", "chauffeur"):
             raise InvalidArgumentError(f"task must be navigation or chauffeur; got {task!r}")
-        if not families:
-            raise InvalidArgumentError("families must name at least one family; got none")
-        for f in families:
+        self.families = _names(families, "families", "family")
+        for f in self.families:
             check_family(f)
+        levels = _names(levels, "levels", "sensing level")
         for lv in levels:
             check_sensing(lv)
             if lv not in ("sensor", "map"):
                 raise InvalidArgumentError(f"a local policy runs at sensor or map, not {lv}")
-        self.families = tuple(families)
-        self.levels = tuple(levels) if task == "navigation" else ("map",)
+        self.levels = levels if task == "navigation" else ("map",)
         self.task = task
+        if reward is not None and not isinstance(reward, Reward):
+            raise InvalidArgumentError("reward must be a copi.envs.local_policy.Reward or None; "
+                                       f"got a {type(reward).__name__}")  # fmt: skip
         self.reward = reward or Reward()
-        positive_int(max_steps, "max_steps")
-        self.max_steps = check_count(int(max_steps), "max_steps", 1_000_000)
+        if not (isinstance(max_steps, int | np.integer) and not isinstance(max_steps, bool)
+                and 1 <= max_steps <= MAX_STEPS):  # fmt: skip
+            raise InvalidArgumentError(f"max_steps must be a positive int, at most {MAX_STEPS:,} "
+                                       f"(steps of one episode); got {max_steps!r}")  # fmt: skip
+        self.max_steps = int(max_steps)
         self._ended: str | None = "not started"
-        self.seed_of_episodes = int(seed_of_episodes)
+        # the episodes' generator is default_rng([seed_of_episodes, k]): a float, a
+        # negative int or a bool would fail there, at the first reset, or draw elsewhere
+        self.seed_of_episodes = check_seed(seed_of_episodes, "seed_of_episodes")
         n = 32
         self.observation_space = spaces.Box(-1.0, 1.0, shape=(observation_size(n),),
                                             dtype=np.float32)  # fmt: skip
@@ -134,16 +168,20 @@ class LocalPolicyEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         k = k % EPISODES_PER_FAMILY
         key = (family, k, self.seed_of_episodes)
         if key not in _POOL:
-            sim = None
+            sim, why = None, ""
             for attempt in range(20):
                 try:
                     sim = draw_episode(family, k + EPISODES_PER_FAMILY * attempt,
                                        self.seed_of_episodes)  # fmt: skip
                     break
-                except Exception:  # a world with no valid task: another one
-                    continue
+                except InvalidWorldError as exc:  # a world with no valid task: another one
+                    why = str(exc)
+                # any other error of copi's is not the episode's but the family's (its
+                # sampler raised, or its data is missing): every draw would meet it, and
+                # retrying would hide it behind "no valid episode"
             if sim is None:
-                raise InvalidArgumentError(f"no valid episode of {family} near episode {k}")
+                raise InvalidArgumentError(f"no valid episode of {family} near episode {k} "
+                                           f"in 20 draws (the last: {why})")  # fmt: skip
             routed = Steering()
             routed.reset(make_task(sim, "map"))
             _POOL[key] = (sim, routed)

@@ -139,6 +139,9 @@ class NavigationEnv(gymnasium.Env[ObsType, ObsType]):
         check_count(int(max_steps), "max_steps", 1_000_000)
         for name, value in (("agent_radius", agent_radius), ("goal_range", goal_range)):
             positive(value, name)
+            if value > 1e6:
+                raise InvalidArgumentError(f"{name} must be at most 1,000,000 agent steps; "
+                                           f"got {value:g}")  # fmt: skip
         for name, value in (("goal_tolerance", goal_tolerance), ("min_distance", min_distance)):
             non_negative(value, name)
         if world is not None and world_file is not None:

@@ -50,6 +50,7 @@ from copi.methods import (
 from copi.online import CausalStrategy
 from copi.results import LifeRow
 from copi.runs import (
+    MAX_LIFE_TASKS,
     MAX_LIVES,
     MAX_TASKS,
     Series,
@@ -119,6 +120,7 @@ class LifelongConfig:
         positive_int(self.tasks, "tasks")
         check_count(self.worlds, "worlds", MAX_LIVES)
         check_count(self.tasks, "tasks", MAX_TASKS)
+        check_count(self.worlds * self.tasks, "worlds x tasks", MAX_LIFE_TASKS)
         check_seed(self.seed)
         if not self.methods:
             raise InvalidArgumentError("methods must name at least one method; got none")

@@ -107,6 +107,7 @@ class PursuitConfig:
             positive_int(getattr(self, name), name)
         check_count(self.games, "games", MAX_EPISODES)
         check_count(self.horizon, "horizon", 100_000)
+        check_count(self.games * self.horizon, "games x horizon (steps in all)", 100_000_000)
         check_seed(self.seed)
         non_negative(self.guard, "guard")
         self.params()  # validates gamma and the radii

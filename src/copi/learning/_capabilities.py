@@ -199,7 +199,7 @@ class Capabilities:
         }
         arrays = self._arrays()
         arrays["metadata"] = np.array(json.dumps(meta, sort_keys=True))
-        return write_npz(path, arrays)
+        return write_npz(path, arrays, "capabilities")
 
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> Capabilities:

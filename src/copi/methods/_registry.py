@@ -16,7 +16,7 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
-from copi._plugins import Registry, origin_of
+from copi._plugins import Registry, origin_of, replaced_origin
 from copi.core import Agent, Sensing, check_sensing
 from copi.errors import InvalidArgumentError
 from copi.learning import Capabilities
@@ -87,7 +87,11 @@ class MethodSpec:
         """What the method's results depend on beyond its parameters, for every run's
         identity: where it comes from (:attr:`origin`) and the files it reads
         (:attr:`inputs`, called). Empty for copi's own methods that read no file."""
-        return {**self.origin, **({} if self.inputs is None else dict(self.inputs()))}
+        origin = self.origin
+        if not origin and REGISTRY.replaced(self.name):  # copi's own class under another name
+            origin = replaced_origin(self.factory, "method")
+            origin["method_code"] += " " + json.dumps(self.params, sort_keys=True)
+        return {**origin, **({} if self.inputs is None else dict(self.inputs()))}
 
     def make(self, capabilities: Capabilities | None = None, **params: Any) -> Agent:
         """A fresh agent with the registered parameters, updated by ``params``."""

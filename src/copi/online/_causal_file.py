@@ -48,7 +48,8 @@ def write_causal_file(
     """Write a map's ``arrays`` and its metadata (its parameters, and what it is of) to
     ``path``, atomically."""
     meta = {"format": FORMAT, "version": FORMAT_VERSION, **meta}
-    return write_npz(path, {**arrays, "metadata": np.array(json.dumps(meta, sort_keys=True))})
+    return write_npz(path, {**arrays, "metadata": np.array(json.dumps(meta, sort_keys=True))},
+                     "causal map")
 
 
 def read_causal_file(

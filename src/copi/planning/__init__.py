@@ -11,7 +11,9 @@ their benchmark maps into worlds. :func:`family_stats` measures the world famili
 from __future__ import annotations
 
 from copi.planning._cspace import (
+    MAX_PLANNED_VERTICES,
     check_plannable,
+    check_size,
     configuration_space,
     length_error_bound,
     shortest_path,
@@ -25,9 +27,11 @@ __all__ = [
     "FamilyStats",
     "GoalField",
     "GridPlanner",
+    "MAX_PLANNED_VERTICES",
     "Plan",
     "VisibilityGraph",
     "check_plannable",
+    "check_size",
     "configuration_space",
     "family_stats",
     "length_error_bound",

@@ -10,7 +10,7 @@ import shapely
 from shapely.geometry.base import BaseGeometry
 
 from copi._validation import FloatArray, as_discs, as_vector
-from copi.errors import InvalidArgumentError, InvalidQueryError
+from copi.errors import InvalidArgumentError, InvalidQueryError, InvalidWorldError
 from copi.geometry.kernels import clearance as _clearance_kernel
 from copi.planning import kernels
 from copi.planning._visibility import Plan, VisibilityGraph, check_work, rings_of
@@ -103,10 +103,31 @@ def configuration_space(
     return shapely.difference(free, blocked)
 
 
+MAX_PLANNED_VERTICES = 20_000
+"""Most vertices (boundary and holes) of a world that episodes are run in: growing its
+walls by the agent's radius alone takes about half a millisecond a vertex (10 s at this
+cap, a minute at 70,000), before any plan. The largest Moving AI map copi ships, scaled
+for agents, has 2,300."""
+
+
+def check_size(world: World) -> None:
+    """Refuse, in one line, a world of more than :data:`MAX_PLANNED_VERTICES` vertices."""
+    n = len(world.boundary) + sum(len(h) for h in world.holes)
+    if n > MAX_PLANNED_VERTICES:
+        raise InvalidWorldError(
+            f"world {world.name!r} has {n:,} vertices, more than episodes are planned in (at "
+            f"most {MAX_PLANNED_VERTICES:,}: growing its walls by the agent's radius alone "
+            "would take minutes); simplify it, or import its map with a larger --passage"
+        )
+
+
 def check_plannable(space: World | BaseGeometry, *, radius: float = 0.0) -> None:
     """Refuse, in one line, a world whose configuration space for an agent of ``radius``
-    is too fine for the exact planner (:func:`~copi.planning._visibility.check_work`):
-    before a run, rather than at its first episode."""
+    is too fine for the exact planner (:func:`~copi.planning._visibility.check_work`), or
+    of more than :data:`MAX_PLANNED_VERTICES` vertices: before a run, rather than at its
+    first episode."""
+    if isinstance(space, World):
+        check_size(space)
     xy, starts = rings_of(configuration_space(space, radius=radius))
     if len(xy):
         check_work(len(kernels.reflex_vertices(xy, starts)), len(xy))

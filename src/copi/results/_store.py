@@ -334,9 +334,14 @@ class ResultsStore:
             for rid, text in rows:
                 if rid == run_id:
                     return
-                other = json.loads(text)
+                other = _config_of(self.path, text)
                 # runs of the method on other worlds, levels or strategies are other runs
                 if any(other.get(k) != config.get(k) for k in _SERIES_KEYS):
+                    continue
+                if not self._holds_rows(rid):
+                    # a run that stopped before its first result (a method or a sampler
+                    # that broke at once): nothing of it to mix with, so it makes way
+                    self.db.execute("DELETE FROM runs WHERE run_id = ?", (rid,))
                     continue
                 raise ResultsError(_difference(self.path, experiment, method, other, config))
             self.db.execute(
@@ -350,6 +355,16 @@ class ResultsStore:
                     time.time(),
                 ),
             )
+
+    def _holds_rows(self, run_id: str) -> bool:
+        """Whether any result of the run is stored (an episode, a game, a life)."""
+        for table in ("episodes", "games", "lifelong", "trajectories"):
+            if table == "lifelong" and not self._has_table("lifelong"):
+                continue
+            if self.db.execute(f"SELECT 1 FROM {table} WHERE run_id = ? LIMIT 1",
+                               (run_id,)).fetchone():  # fmt: skip
+                return True
+        return False
 
     def _writable(self) -> None:
         if self.readonly:
@@ -469,8 +484,10 @@ class ResultsStore:
                 "ORDER BY rowid"
             ).fetchall()
         return [
-            RunRow(run_id=r[0], experiment=r[1], method=r[2], config=json.loads(r[3]),
-                   versions=json.loads(r[4]), created=r[5])
+            RunRow(run_id=r[0], experiment=r[1], method=r[2],
+                   config=_config_of(self.path, r[3]),
+                   versions=_config_of(self.path, r[4], "a run's stored versions"),
+                   created=r[5])
             for r in cur
         ]  # fmt: skip
 
@@ -513,7 +530,24 @@ class ResultsStore:
                 "ORDER BY episode",
                 (run_id, method),
             ).fetchall()
-        return [{"episode": r[0], **json.loads(r[1])} for r in cur]
+        return [{"episode": r[0], **_config_of(self.path, r[1], "a stored trajectory")}
+                for r in cur]  # fmt: skip
+
+
+def _config_of(path: Path, text: Any, what: str = "a run's stored configuration") -> dict[
+    str, Any
+]:
+    """A JSON object the store keeps (a run's configuration, its versions, a trajectory),
+    or one clear error when it is not one."""
+    try:
+        config = json.loads(text)
+    except (TypeError, ValueError, RecursionError) as exc:  # junk, 5000-digit numbers
+        raise ResultsError(f"{path}: {what} is not JSON ({type(exc).__name__}); the file "
+                           "is damaged") from None  # fmt: skip
+    if not isinstance(config, dict):
+        raise ResultsError(f"{path}: {what} is not a JSON object (found "
+                           f"{type(config).__name__}); the file is damaged")  # fmt: skip
+    return config
 
 
 _SERIES_KEYS = ("family", "sensing", "strategy")

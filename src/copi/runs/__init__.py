@@ -36,7 +36,15 @@ from copi.runs._episode import (
 )
 from copi.runs._executor import ExecutorError, InlineExecutor, make_executor
 from copi.runs._inputs import Inputs, check_family_inputs, code_version, resolve_inputs, run_id
-from copi.runs._series import MAX_EPISODES, MAX_LIVES, MAX_TASKS, Series, run_one, run_series
+from copi.runs._series import (
+    MAX_EPISODES,
+    MAX_LIFE_TASKS,
+    MAX_LIVES,
+    MAX_TASKS,
+    Series,
+    run_one,
+    run_series,
+)
 
 __all__ = [
     "EnvEpisode",
@@ -46,6 +54,7 @@ __all__ = [
     "InlineExecutor",
     "Inputs",
     "MAX_EPISODES",
+    "MAX_LIFE_TASKS",
     "MAX_LIVES",
     "MAX_TASKS",
     "Series",

@@ -23,7 +23,7 @@ from copi.core import Agent, Sensing
 from copi.errors import InvalidWorldError, MethodError, WorldFileError
 from copi.learning import Capabilities
 from copi.online import ContextController, LearntAgent, Mapping
-from copi.planning import check_plannable, shortest_path
+from copi.planning import check_plannable, check_size, shortest_path
 from copi.results import EpisodeRow
 from copi.runs._episode import EpisodeOutcome, optimal_to_goal, run_episode
 from copi.world import RangeSensor, Simulator, World, check_task, load_worlds, sample_world
@@ -245,6 +245,7 @@ def check_world_file(path: str | os.PathLike[str], *, agent_radius: float = 0.3)
     a run is registered)."""
     for i, world in enumerate(load_worlds(path)):
         try:
+            check_size(world)  # a few milliseconds, before the geometry that would take minutes
             check_task(world, radius=agent_radius)
             check_plannable(world, radius=agent_radius)
         except InvalidWorldError as exc:

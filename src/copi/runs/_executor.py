@@ -38,9 +38,10 @@ class InlineExecutor(Executor):
         return fut
 
 
-HANDSHAKE_SECONDS = 8.0
+HANDSHAKE_SECONDS = 5.0
 """How long a Dask scheduler has to answer (a server of another kind at the address may
-accept the connection and then say nothing, forever)."""
+accept the connection and then say nothing, forever): with copi's start-up, a command
+pointed at no scheduler ends within 10 s."""
 
 
 def _connect(client_class: Any, scheduler: str) -> Any:
@@ -67,6 +68,10 @@ def _connect(client_class: Any, scheduler: str) -> Any:
         exc = box["error"]
         if isinstance(exc, OSError | TimeoutError | ValueError):
             raise ExecutorError(f"cannot reach the Dask scheduler at {scheduler}: {exc}")
+        if isinstance(exc, MemoryError | OverflowError):
+            # a server of another kind spoke first: its bytes read as a message's length
+            raise ExecutorError(f"cannot reach the Dask scheduler at {scheduler}: what "
+                                "answered there is not a Dask scheduler") from None  # fmt: skip
         raise exc
     return box["client"]
 

@@ -20,6 +20,7 @@ from copi.runs._inputs import run_id
 
 __all__ = [
     "MAX_EPISODES",
+    "MAX_LIFE_TASKS",
     "MAX_LIVES",
     "MAX_TASKS",
     "Series",
@@ -86,6 +87,8 @@ three hours a method; more is a typing error, refused before anything is written
 MAX_LIVES = 10_000
 """Most lives (worlds) of a lifelong run, and MAX_TASKS tasks in each."""
 MAX_TASKS = 10_000
+MAX_LIFE_TASKS = 1_000_000
+"""Most tasks of a lifelong run in all (lives times tasks)."""
 
 
 def execute(

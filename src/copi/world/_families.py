@@ -11,7 +11,7 @@ import numpy as np
 import shapely
 from shapely.geometry import LineString
 
-from copi._plugins import Registry, origin_of
+from copi._plugins import Registry, origin_of, replaced_origin
 from copi._rng import Seed, as_generator
 from copi._validation import as_vector
 from copi.errors import CopiError, InvalidArgumentError
@@ -150,7 +150,10 @@ def family_inputs(family: str) -> dict[str, str]:
     ({}, ['maps_sha'])
     """
     spec = family_spec(family)
-    return {**spec.origin, **({} if spec.inputs is None else dict(spec.inputs()))}
+    origin = spec.origin
+    if not origin and _FAMILIES.replaced(family):  # copi's own sampler under another name
+        origin = replaced_origin(spec.sampler, "family")
+    return {**origin, **({} if spec.inputs is None else dict(spec.inputs()))}
 
 
 def sample_world(

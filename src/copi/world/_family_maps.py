@@ -33,6 +33,10 @@ __all__ = [
 MOVINGAI_ENV = "COPI_MOVINGAI"
 """Environment variable naming another directory of Moving AI maps."""
 
+MAX_PASSAGE = 100.0
+"""Widest a map's passages may be scaled to, agent steps (the sensor reaches 10: wider
+passages make a world of empty halls, and far wider ones overflow the geometry)."""
+
 PACKAGED_MAPS = Path(__file__).resolve().parents[1] / "data" / "movingai"
 """The ten Moving AI maps copi ships (their provenance and licence beside them)."""
 
@@ -245,8 +249,9 @@ def scaled_map_world(
         When the scaled map has too little room for tasks (a task needs two free points
         10 apart).
     """
-    if not (math.isfinite(passage) and passage > 0):
-        raise InvalidArgumentError(f"passage must be a finite number > 0; got {passage!r}")
+    if not (math.isfinite(passage) and 0 < passage <= MAX_PASSAGE):
+        raise InvalidArgumentError(f"passage must be a number in (0, {MAX_PASSAGE:g}] agent "
+                                   f"steps; got {passage!r}")  # fmt: skip
     m = _load(os.fspath(path))
     scale = passage / m.passage_cells
     world = _window(m, 0, 0, m.width, m.height, scale, agent_radius, name or m.name)

@@ -75,6 +75,8 @@ def load_worlds(
         ) from None
     except RecursionError:
         raise WorldFileError(f"{p}: JSON nested too deeply to be a world file") from None
+    except ValueError as exc:  # a number of thousands of digits, beyond Python's int limit
+        raise WorldFileError(f"{p}: not a world file ({str(exc).splitlines()[0]})") from None
     items = data if isinstance(data, list) else [data]
     if len(items) > max_worlds:
         raise WorldFileError(

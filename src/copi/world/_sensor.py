@@ -15,6 +15,9 @@ from copi.world._world import World
 __all__ = ["MAX_RAYS", "RangeSensor"]
 
 MAX_RAYS = 4096
+MAX_RANGE = 1000.0
+"""Farthest a ring may read, agent steps (worlds are at most 1e6 across; a range beyond
+this is a slip, and one near 1e300 overflows the geometry)."""
 """Most rays a ring may have (copi's is 32; 4,096 is a ray every 0.09 degrees)."""
 
 
@@ -49,8 +52,9 @@ class RangeSensor:
                 f"a sensor); got {self.n_rays:,}"
             )
         mr = float(self.max_range)
-        if not np.isfinite(mr) or mr <= 0:
-            raise InvalidArgumentError(f"max_range must be a finite number > 0; got {mr}")
+        if not np.isfinite(mr) or not 0 < mr <= MAX_RANGE:
+            raise InvalidArgumentError(f"max_range must be a number in (0, {MAX_RANGE:g}] agent "
+                                       f"steps; got {mr:g}")  # fmt: skip
         object.__setattr__(self, "n_rays", int(self.n_rays))
         object.__setattr__(self, "max_range", mr)
         angles = ring_angles(self.n_rays)

@@ -1,0 +1,104 @@
+"""The configuration of a PPO training run (:mod:`copi.rl._train`): every field decides
+the policy it learns, and each is checked before anything is trained."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+from copi.baselines import MAX_LAYERS, MAX_WIDTH
+from copi.envs.local_policy import Reward
+from copi.errors import InvalidArgumentError
+from copi.world import check_family
+
+__all__ = ["MAX_SEED", "TrainConfig"]
+
+MAX_SEED = 2**32 - 1
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    """One training run; every field decides the policy it learns."""
+
+    families: tuple[str, ...] = ("star", "polygon", "indoor", "maps", "crowd")
+    """World families of the training episodes (a mix: one drawn per episode)."""
+    levels: tuple[str, ...] = ("sensor", "map")
+    task: str = "navigation"
+    """"navigation" or "chauffeur" (the evader of Experiment 2's game)."""
+    steps: int = 2_000_000
+    """Environment steps of training."""
+    seed: int = 0
+    """Seed of the network, the optimiser and the episodes' order (the episodes themselves
+    are those of the training seed, copi.rl.TRAINING_SEED)."""
+    envs: int = 8
+    """Environments stepped together (a vectorised environment in this process)."""
+    learning_rate: float = 1e-3
+    """With ``log_std`` -1, the setting chosen among five on validation seed 1
+    (``studies/rl_train_all.py --tune``; SB3's defaults are 3e-4 and 0)."""
+    n_steps: int = 256
+    """Steps per environment between updates."""
+    batch_size: int = 256
+    n_epochs: int = 10
+    gamma: float = 0.99
+    ent_coef: float = 0.0
+    log_std: float = -1.0
+    """The policy's initial log standard deviation of its actions (exploration noise)."""
+    net: tuple[int, ...] = (64, 64)
+    """Hidden layers of the actor (and of the critic)."""
+    reward: Reward = field(default_factory=Reward)
+    max_steps: int = 500
+
+    def __post_init__(self) -> None:
+        for f in self.families:
+            check_family(f)
+        if self.task not in ("navigation", "chauffeur"):
+            raise InvalidArgumentError(f"task must be navigation or chauffeur; got {self.task!r}")
+        for key in ("steps", "envs", "n_steps", "batch_size", "n_epochs", "max_steps"):
+            v = getattr(self, key)
+            # a plain int: int(v) of a string, NaN or infinity would raise an error of its
+            # own, and a numpy int would not go into the checkpoint's JSON
+            if isinstance(v, bool) or not isinstance(v, int) or v < 1:
+                raise InvalidArgumentError(f"{key} must be a positive int; got {v!r}")
+        if isinstance(self.seed, bool) or not (isinstance(self.seed, int)
+                                               and 0 <= self.seed <= MAX_SEED):
+            raise InvalidArgumentError(f"seed must be an int in 0 .. {MAX_SEED:,} (the range "
+                                       f"of the generators PPO seeds); got {self.seed!r}")
+        if self.steps > 10**9:
+            raise InvalidArgumentError(f"steps must be at most 1,000,000,000; got {self.steps:,}")
+        if not 1 <= self.envs <= 256:
+            raise InvalidArgumentError(f"envs must be in 1 .. 256; got {self.envs}")
+        for key in ("learning_rate", "gamma", "ent_coef"):
+            v = getattr(self, key)
+            if not (isinstance(v, int | float) and math.isfinite(v) and 0 <= v <= 1):
+                raise InvalidArgumentError(f"{key} must be a number in [0, 1]; got {v!r}")
+        if not (isinstance(self.log_std, int | float) and -5 <= self.log_std <= 2):
+            raise InvalidArgumentError(f"log_std must be a number in [-5, 2]; got {self.log_std!r}")
+        most = MAX_LAYERS - 1  # the action layer is the policy file's last
+        if not (1 <= len(self.net) <= most) or not all(
+            isinstance(h, int) and not isinstance(h, bool) and 1 <= h <= MAX_WIDTH
+            for h in self.net
+        ):
+            raise InvalidArgumentError(f"net must be 1 to {most} layer widths in 1 .. "
+                                       f"{MAX_WIDTH}; got {self.net!r}")  # fmt: skip
+        if not self.families or not self.levels:
+            raise InvalidArgumentError("families and levels must each name at least one; got "
+                                       f"families {self.families!r}, levels {self.levels!r}")
+
+    @property
+    def rollout(self) -> int:
+        """Environment steps between two updates: PPO trains in whole rollouts."""
+        return self.envs * self.n_steps
+
+    @property
+    def planned_steps(self) -> int:
+        """The steps a run takes: ``steps`` rounded up to whole rollouts."""
+        return -(-self.steps // self.rollout) * self.rollout
+
+    def identity(self) -> dict[str, Any]:
+        d = dataclasses.asdict(self)
+        d["net"] = list(self.net)
+        return d
+
+

@@ -29,3 +29,14 @@ def faithful_caps(tmp_path_factory: pytest.TempPathFactory) -> Path:
     path = tmp_path_factory.mktemp("caps") / "capabilities-faithful.npz"
     learn(LearnParams(worlds=6, steps=150, directions=4, seed=1)).save(path)
     return path
+
+
+@pytest.fixture(scope="session")
+def predictive_caps(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A small capabilities file of the predictive preset (a model of what moves, safety
+    networks that see the static reading)."""
+    path = tmp_path_factory.mktemp("caps") / "capabilities-predictive.npz"
+    learn(LearnParams(worlds=6, steps=150, directions=16, safety=True, safety_static=True,
+                      predict=True, probe_worlds=4, probe_steps=40, predict_worlds=12,
+                      predict_steps=120, seed=1)).save(path)  # fmt: skip
+    return path

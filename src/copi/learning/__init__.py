@@ -11,6 +11,17 @@ from __future__ import annotations
 from copi.learning._capabilities import FORMAT_VERSION, Capabilities
 from copi.learning._explore import Exploration, explore
 from copi.learning._gng import GrowingNeuralGas
+from copi.learning._motion import (
+    WELL,
+    MotionModel,
+    MotionTracker,
+    detect_discs,
+    fit_circle,
+    learn_motion,
+    motion_errors,
+    motion_tables,
+    sample_motion,
+)
 from copi.learning._pipeline import LearnParams, learn, simulated_steps
 from copi.learning._policies import (
     ActionPriors,
@@ -48,6 +59,8 @@ __all__ = [
     "GrowingNeuralGas",
     "Landmarks",
     "LearnParams",
+    "MotionModel",
+    "MotionTracker",
     "Operator",
     "PermutationAutomaton",
     "PolicyLearner",
@@ -57,17 +70,24 @@ __all__ = [
     "SafetyModel",
     "SymmetryGroup",
     "ValueIterationLearner",
+    "WELL",
     "bootstrap_landmarks",
     "compass",
     "design_matrix",
+    "detect_discs",
     "explore",
+    "fit_circle",
     "fork_simulator",
     "learn",
+    "learn_motion",
     "local_world",
+    "motion_errors",
+    "motion_tables",
     "predict",
     "probe_actions",
     "reduce_landmarks",
     "ring_operators",
+    "sample_motion",
     "simulated_steps",
     "skeletonize",
 ]

@@ -16,6 +16,7 @@ from copi._files import write_npz
 from copi._npz import read_metadata, read_npz
 from copi.errors import CapabilitiesFormatError
 from copi.learning._contexts import MOTION_CLIP, context_blocks, motion_contexts
+from copi.learning._motion import MOTION_MEMBERS, MotionModel, motion_arrays, motion_from
 from copi.learning._policies import ActionPriors, PolicySet
 from copi.learning._safety import HIDDEN, SafetyModel
 from copi.learning._skeleton import Landmarks
@@ -34,7 +35,8 @@ _REQUIRED = (
     "pol_path_start",
 )  # fmt: skip
 _SAFETY = ("safety_net", "safety_template", "safety_counts")
-_MEMBERS = (*_REQUIRED, "prior_counts", "prior_probabilities", *_SAFETY, "metadata")
+_MEMBERS = (*_REQUIRED, "prior_counts", "prior_probabilities", *_SAFETY, *MOTION_MEMBERS,
+            "metadata")  # fmt: skip
 """The only members read from a file; any other is ignored, never unpacked."""
 MAX_MEMBER_BYTES = 1 << 28
 """A member unpacking to more than this (256 MiB) is refused before it is unpacked."""
@@ -57,6 +59,7 @@ _NDIM = {
     "pol_passable": 2, "pol_actions": 3, "pol_lengths": 2, "pol_path_xy": 2,
     "pol_path_start": 1, "prior_counts": 2, "prior_probabilities": 2,
     "safety_net": 3, "safety_template": 2, "safety_counts": 2,
+    "motion_turn": 2, "motion_speed": 2, "motion_start": 1,
 }  # fmt: skip
 
 # Members holding indices, counts or flags: written as integers (or booleans), and
@@ -89,6 +92,8 @@ class Capabilities:
     priors: ActionPriors | None = None
     safety: SafetyModel | None = None
     """Safety priors from counterfactual probes (``learn --preset learnt``), else None."""
+    motion_model: MotionModel | None = None
+    """The learnt model of what moves (``learn --preset predictive``), else None."""
     params: dict[str, Any] = field(default_factory=dict)
     """How they were learnt (JSON-able): sensor, agent, exploration, GNG, ..."""
     stats: dict[str, Any] = field(default_factory=dict)
@@ -174,6 +179,8 @@ class Capabilities:
             out["safety_net"] = self.safety.net
             out["safety_template"] = self.safety.template_safe
             out["safety_counts"] = self.safety.template_counts
+        if self.motion_model is not None:
+            out.update(motion_arrays(self.motion_model))
         return out
 
     def save(self, path: str | os.PathLike[str]) -> Path:
@@ -197,6 +204,9 @@ class Capabilities:
             "params": self._params(),
             "stats": _without_timings(self.stats),
         }
+        if self.motion_model is not None:
+            meta["motion_model"] = {"radius": self.motion_model.radius,
+                                    "stats": self.motion_model.stats}  # fmt: skip
         arrays = self._arrays()
         arrays["metadata"] = np.array(json.dumps(meta, sort_keys=True))
         return write_npz(path, arrays, "capabilities")
@@ -301,6 +311,7 @@ class Capabilities:
             policies=policies,
             priors=priors,
             safety=safety,
+            motion_model=motion_from(meta, a),
             params=dict(meta.get("params", {})),
             stats=dict(meta.get("stats", {})),
         )
@@ -324,6 +335,9 @@ class Capabilities:
             and self.policies.names == other.policies.names
             and self.policies.learner == other.policies.learner
             and self.landmarks.k == other.landmarks.k
+            and (self.motion_model is None) == (other.motion_model is None)
+            and (self.motion_model is None or other.motion_model is None
+                 or self.motion_model.radius == other.motion_model.radius)
             and self._params() == other._params()
             and _without_timings(self.stats) == _without_timings(other.stats)
         )

@@ -43,11 +43,14 @@ from numpy.typing import NDArray
 from copi._validation import positive_int
 from copi.core import EXPLAINED
 from copi.errors import InvalidArgumentError
+from copi.geometry import ring_angles
 from copi.geometry.kernels import local_segments, sweep_one
 from copi.world import RandomWalk, RangeSensor, Simulator, random_world, sample_world
 
 __all__ = [
     "AHEAD_EDGES",
+    "MOTION_MEMBERS",
+    "WELL",
     "MotionModel",
     "MotionTracker",
     "N_TURN",
@@ -55,7 +58,10 @@ __all__ = [
     "detect_discs",
     "fit_circle",
     "learn_motion",
+    "motion_arrays",
     "motion_errors",
+    "motion_from",
+    "motion_tables",
     "sample_motion",
 ]
 
@@ -176,9 +182,56 @@ class MotionModel:
     stats: dict[str, Any] = field(default_factory=dict)
     """What learning measured: examples, held-out errors against constant velocity."""
 
-    def turn_p(self) -> NDArray[np.float64]:
+    def turn_p(self, kind: str = "robust") -> NDArray[np.float64]:
+        """P(turn bin | room ahead), one row per room bin. ``"empirical"``: the turns as
+        counted (Laplace-smoothed). ``"robust"``: each row's core, a normal law of the
+        robust spread of its turns (1.4826 times their median absolute value), plus as
+        many uniform turns as that row has beyond three spreads *more than* the widest
+        room's row (with room to spare nothing makes a body turn sharply: the broad turns
+        seen there are the perception's own mistakes, a swapped match or a poor fit, and
+        only what walls add beyond them is the bodies' own)."""
         c = self.turn_counts + 0.5
-        return c / c.sum(axis=1, keepdims=True)
+        empirical = c / c.sum(axis=1, keepdims=True)
+        if kind == "empirical":
+            return empirical
+        if kind != "robust":
+            raise InvalidArgumentError(f"kind must be robust or empirical; got {kind!r}")
+        sd, broad = self.turn_spread()
+        base = broad[-1]
+        out = np.empty_like(empirical)
+        for a in range(len(out)):
+            w = max(0.0, broad[a] - base) / (1.0 - base) if base < 1 else 0.0
+            cdf = _normal_cdf(_TURN_EDGES / max(sd[a], 1e-3))
+            core = np.diff(cdf) / max(cdf[-1] - cdf[0], 1e-12)
+            out[a] = (1.0 - w) * core + w / N_TURN
+        return out
+
+    def turn_spread(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Per room bin, the robust spread of the turns (radians) and the share of them
+        beyond three such spreads."""
+        mids = 0.5 * (_TURN_EDGES[:-1] + _TURN_EDGES[1:])
+        sd = np.empty(len(self.turn_counts))
+        broad = np.empty(len(self.turn_counts))
+        order = np.argsort(np.abs(mids))
+        for a, row in enumerate(self.turn_counts):
+            total = row.sum()
+            if total <= 0:
+                sd[a], broad[a] = math.pi, 1.0
+                continue
+            cum = np.cumsum(row[order]) / total
+            at = min(int(np.searchsorted(cum, 0.5)), len(cum) - 1)
+            med = float(np.abs(mids[order])[at])
+            sd[a] = MAD * max(med, 1e-3)
+            broad[a] = float(row[np.abs(mids) > 3 * sd[a]].sum() / total)
+        return sd, broad
+
+    def priors(self) -> dict[str, float]:
+        """What a :class:`MotionTracker` assumes until it has measured its own: the
+        median speed of the bodies seen, and the robust turn spread with room to spare."""
+        cum = np.cumsum(self.start_p())
+        b = min(int(np.searchsorted(cum, 0.5)), len(cum) - 1)
+        speed = 0.5 * (SPEED_EDGES[b] + SPEED_EDGES[b + 1])
+        return {"speed": float(speed), "turn_sd": float(self.turn_spread()[0][-1])}
 
     def speed_p(self) -> NDArray[np.float64]:
         c = self.speed_counts + 0.5 * np.eye(len(self.speed_counts)) + 1e-3
@@ -210,110 +263,173 @@ class MotionModel:
         return self
 
 
+MIN_SPEED_SAMPLES = 5
+MIN_TURN_SAMPLES = 20
+MAD = 1.4826
+"""Standard deviation over median absolute deviation, for a normal law."""
+
+
 class MotionTracker:
     """The moving bodies of a ``map``-level agent's readings, followed from step to step.
 
-    Each reading's bodies (:func:`detect_discs`) are matched to the last step's: with a
-    :class:`MotionModel`, the likeliest pairs first (the body's turn and speed under the
-    model; a pair the model gives less than ``floor`` times the likeliest is refused);
-    without one (learning), the nearest pairs within :data:`GATE`. A body's heading is
-    its last displacement's direction (known once it moved more than 0.2 between two
-    well-measured fits), its speed the mean of its well-measured displacements.
+    Each reading's bodies (:func:`detect_discs`) are matched to the last step's: a body
+    moves ``speed`` a step whichever way it turned, so of the last step's bodies one
+    ``speed`` away (within 0.5), the nearest to its predicted place first. A body's
+    velocity is its displacement's direction at the estimated speed; one matched to
+    nothing, or that barely moved (0.2 or less), has velocity zero (its heading unknown).
 
-    ``rows()`` gives the bodies as rows (x, y, heading, known, speed, radius).
+    ``speed`` is the median displacement of bodies measured well twice running
+    (:data:`WELL` rays or more each time), ``turn_sd`` the robust spread (1.4826 times
+    the median absolute value) of the heading change between two such displacements in a
+    row; until enough have been seen (5 and 20) the priors stand, the values given (a
+    learnt :class:`MotionModel` gives its own: :meth:`MotionModel.priors`).
+
+    With ``ahead`` (learning: the room a body has before a wall along its heading, from
+    the static map), every body followed over three well-measured readings whose match
+    had no other candidate is an example of how bodies move, kept in :attr:`examples`.
+
+    Examples
+    --------
+    >>> from copi.world import RangeSensor, World
+    >>> room = World([[0, 0], [20, 0], [20, 20], [0, 20]])
+    >>> sensor, me = RangeSensor(), np.array([10.0, 10.0])
+    >>> static = sensor.scan(room, me, np.zeros((0, 2)), np.zeros(0))
+    >>> ranges = sensor.scan(room, me, np.array([[13.0, 10.0]]), np.array([0.8]))
+    >>> t = MotionTracker(sensor.n_rays, sensor.max_range)
+    >>> centres, radii, rays = t.detect(ranges, static, me)
+    >>> np.round(centres, 2).tolist(), np.round(radii, 1).tolist(), rays.tolist()
+    ([[13.0, 10.0]], [0.8], [3])
     """
 
     def __init__(
-        self, n_rays: int, max_range: float, *, model: MotionModel | None = None
+        self,
+        n_rays: int,
+        max_range: float,
+        *,
+        speed: float = 0.7,
+        turn_sd: float = 1.0,
+        ahead: Callable[[NDArray[np.float64], float, float], float] | None = None,
     ) -> None:
-        ang = 2 * np.pi * np.arange(n_rays) / n_rays
-        self.unit = np.column_stack([np.cos(ang), np.sin(ang)])
+        for key, v in (("speed", speed), ("turn_sd", turn_sd), ("max_range", max_range)):
+            if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
+                raise InvalidArgumentError(f"{key} must be a positive number; got {v!r}")
+        if int(n_rays) != n_rays or n_rays < 4:
+            raise InvalidArgumentError(f"n_rays must be a whole number >= 4; got {n_rays!r}")
+        self.n_rays = int(n_rays)
         self.max_range = float(max_range)
-        self.model = model
-        self._radii: list[float] = [] if model is None else [model.radius]
-        self.tracks: list[dict[str, Any]] = []
-        if model is not None:
-            self._lturn = np.log(model.turn_p().sum(axis=0) / len(model.turn_p()))
-            self._lstart = np.log(model.start_p())
-            self._lspeed = np.log(model.speed_p())
-            self._fallback = model.mean_speed()
+        ang = ring_angles(self.n_rays)
+        self._unit = np.column_stack([np.cos(ang), np.sin(ang)])
+        self.prior_speed = float(speed)
+        self.prior_turn_sd = float(turn_sd)
+        self.ahead = ahead
+        self._tracks: list[dict[str, Any]] = []
+        # what its tracks measured: displacements, heading changes, radii
+        self._speeds: list[float] = []
+        self._turns: list[float] = []
+        self._radii: list[float] = []
+        self._radius = np.zeros(0)
         self.examples: list[tuple[float, float, float, float]] = []
         """(room ahead before the step, turn, last speed, speed) of each body followed
-        over three well-measured readings (what :func:`learn_motion` counts)."""
+        over three well-measured readings (with ``ahead``; what :func:`learn_motion`
+        counts)."""
 
-    def _score(self, t: dict[str, Any], d: NDArray[np.float64]) -> float:
-        length = math.hypot(d[0], d[1])
-        if self.model is None:
-            return -length if length <= GATE else -math.inf
-        sb = _bin(SPEED_EDGES, length)
-        if length > SPEED_EDGES[-1]:
-            return -math.inf
-        if t["speed"] is None:
-            score = self._lstart[sb]
-        else:
-            score = self._lspeed[_bin(SPEED_EDGES, t["speed"]), sb]
-        if t["heading"] is not None and length > 0.2:
-            turn = _wrap(math.atan2(d[1], d[0]) - t["heading"])
-            score += self._lturn[_bin(_TURN_EDGES, turn)]
-        return float(score)
+    @property
+    def speed(self) -> float:
+        """The bodies' speed per step: estimated once 5 displacements were measured."""
+        if len(self._speeds) < MIN_SPEED_SAMPLES:
+            return self.prior_speed
+        return float(np.median(self._speeds))
+
+    @property
+    def turn_sd(self) -> float:
+        """The spread of a body's heading change per step, radians (robust estimate)."""
+        if len(self._turns) < MIN_TURN_SAMPLES:
+            return self.prior_turn_sd
+        return float(MAD * np.median(np.abs(self._turns)))
+
+    def detect(
+        self, ranges: NDArray[np.float64], static: NDArray[np.float64], position: Any
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
+        """The bodies in one reading: centres (k, 2), radii (k,) and the rays on each
+        (the radii of well-measured bodies are remembered for the short arcs to come)."""
+        s = np.asarray(ranges, dtype=np.float64)
+        st = np.asarray(static, dtype=np.float64)
+        if s.shape != (self.n_rays,) or st.shape != (self.n_rays,):
+            raise InvalidArgumentError(
+                f"ranges and static must have shape ({self.n_rays},); got {s.shape} and "
+                f"{st.shape}"
+            )
+        pos = np.asarray(position, dtype=np.float64)
+        return detect_discs(s, st, pos, self._unit, self.max_range, self._radii)
 
     def update(
-        self,
-        ranges: NDArray[np.float64],
-        static: NDArray[np.float64],
-        position: NDArray[np.float64],
-        ahead: Callable[[NDArray[np.float64], float, float], float] | None = None,
+        self, ranges: NDArray[np.float64], static: NDArray[np.float64], position: Any
     ) -> NDArray[np.float64]:
-        """Follow one more reading; the bodies as :meth:`rows`. ``ahead(c, heading,
-        radius)``: the room before a wall (learning records it with each example)."""
-        C, R, rays = detect_discs(np.asarray(ranges, dtype=np.float64),
-                                  np.asarray(static, dtype=np.float64),
-                                  np.asarray(position, dtype=np.float64), self.unit,
-                                  self.max_range, self._radii)  # fmt: skip
+        """Follow one more reading; the bodies made out, as rows (x, y, vx, vy, radius)
+        (velocity zero: heading unknown), the rows :class:`copi.bounds.ModelOracle` reads
+        (:meth:`bodies` gives them as :func:`sample_motion` reads them)."""
+        C, R, rays = self.detect(ranges, static, position)
+        tracks = self._tracks
+        speed = self.speed
         pairs = []
-        for ti, t in enumerate(self.tracks):
+        for ti, t in enumerate(tracks):
             for di in range(len(C)):
-                sc = self._score(t, C[di] - t["c"])
-                if sc > -math.inf:
-                    pairs.append((-sc, ti, di))
+                # a body moves ``speed`` a step, whichever way it turned; of the
+                # candidates, the one nearest its prediction (if its heading is known)
+                ring = abs(math.dist(C[di], t["c"]) - speed)
+                if ring < 0.5:
+                    near = math.dist(C[di], t["c"] + t["v"]) if t["known"] else ring
+                    pairs.append((near, ti, di))
         pairs.sort()
-        used: set[int] = set()
-        new: list[dict[str, Any] | None] = [None] * len(C)
+        # a match is unambiguous when neither of its two had another candidate: only
+        # those teach the model (a swapped match reads as a turn that never was)
+        per_t = np.bincount([ti for _, ti, _ in pairs], minlength=len(tracks))
+        per_d = np.bincount([di for _, _, di in pairs], minlength=len(C))
+        used_t: set[int] = set()
+        new: list[dict[str, Any] | None] = [None] * len(C)  # a track per detection
         for _, ti, di in pairs:
-            if ti in used or new[di] is not None:
+            if ti in used_t or new[di] is not None:
                 continue
-            used.add(ti)
-            t = self.tracks[ti]
-            d = C[di] - t["c"]
-            length = math.hypot(d[0], d[1])
-            well = rays[di] >= WELL and t["rays"] >= WELL
-            heading = math.atan2(d[1], d[0]) if length > 0.2 else None
-            speed = t["speed"]
-            if well:
-                speed = length if speed is None else 0.5 * (speed + length)
-                if t["heading"] is not None and heading is not None and t["well_speed"]:
-                    room = ahead(t["c"], t["heading"], R[di]) if ahead is not None else math.inf
-                    self.examples.append((room, _wrap(heading - t["heading"]),
-                                          t["well_speed"], length))  # fmt: skip
-            new[di] = {"c": C[di].copy(), "r": float(R[di]), "rays": int(rays[di]),
-                       "heading": heading if heading is not None else t["heading"],
-                       "speed": speed, "well_speed": length if well else None}  # fmt: skip
+            used_t.add(ti)
+            t = tracks[ti]
+            disp = C[di] - t["c"]
+            length = math.hypot(disp[0], disp[1])
+            # measured: both fits good, and it moved (a heading to speak of)
+            measured = rays[di] >= WELL and t["rays"] >= WELL and length > 0.05
+            heading = math.atan2(disp[1], disp[0])
+            if measured:
+                self._speeds.append(length)
+                if t["heading"] is not None:
+                    turn = (heading - t["heading"] + math.pi) % (2 * math.pi) - math.pi
+                    self._turns.append(turn)
+                    if self.ahead is not None and per_t[ti] == 1 and per_d[di] == 1:
+                        room = self.ahead(t["c"], t["heading"], float(R[di]))
+                        self.examples.append((room, turn, t["length"], length))
+            known = length > 0.2
+            new[di] = {
+                "c": C[di].copy(), "rays": int(rays[di]), "known": known,
+                "v": disp / length * speed if known else np.zeros(2),
+                "heading": heading if measured else None, "length": length,
+            }  # fmt: skip
         for di in range(len(C)):
             if new[di] is None:  # first seen: heading unknown
-                new[di] = {"c": C[di].copy(), "r": float(R[di]), "rays": int(rays[di]),
-                           "heading": None, "speed": None, "well_speed": None}  # fmt: skip
-        self.tracks = [t for t in new if t is not None]
-        return self.rows()
+                new[di] = {"c": C[di].copy(), "rays": int(rays[di]), "known": False,
+                           "v": np.zeros(2), "heading": None, "length": 0.0}  # fmt: skip
+        self._tracks = [t for t in new if t is not None]
+        self._radius = np.asarray(R, dtype=np.float64)
+        out = np.zeros((len(C), 5))
+        for i, t in enumerate(self._tracks):
+            out[i, :2], out[i, 2:4], out[i, 4] = t["c"], t["v"], R[i]
+        return out
 
-    def rows(self) -> NDArray[np.float64]:
-        """The bodies followed now: (x, y, heading, known, speed, radius) each, a speed
-        of a body seen once that of the model (or 0.7 without one)."""
-        fallback = self._fallback if self.model is not None else 0.7
-        out = np.zeros((len(self.tracks), 6))
-        for i, t in enumerate(self.tracks):
-            known = t["heading"] is not None
-            out[i] = (t["c"][0], t["c"][1], t["heading"] if known else 0.0, float(known),
-                      t["speed"] if t["speed"] is not None else fallback, t["r"])  # fmt: skip
+    def bodies(self) -> NDArray[np.float64]:
+        """The bodies of the last reading as :func:`sample_motion` reads them: rows (x, y,
+        heading, known, speed, radius), the speed the estimated one."""
+        out = np.zeros((len(self._tracks), 6))
+        for i, t in enumerate(self._tracks):
+            v = t["v"]
+            out[i] = (t["c"][0], t["c"][1], math.atan2(v[1], v[0]), float(t["known"]),
+                      self.speed, self._radius[i])  # fmt: skip
         return out
 
 
@@ -327,7 +443,6 @@ def _walk_examples(
     world = random_world(rng) if family == "star" else sample_world(family, rng)
     sim = Simulator.from_world(world, rng, agent_radius=agent_radius, sensor=sensor)
     walk = RandomWalk(seed=rng)
-    tracker = MotionTracker(sensor.n_rays, sensor.max_range)
     segs = np.ascontiguousarray(world.segments)
 
     def ahead(c: NDArray[np.float64], heading: float, r: float) -> float:
@@ -335,16 +450,18 @@ def _walk_examples(
         return float(min(sweep_one(c[0], c[1], math.cos(heading), math.sin(heading), local, r),
                          1e3))  # fmt: skip
 
+    tracker = MotionTracker(sensor.n_rays, sensor.max_range, ahead=ahead)
+
     none = np.zeros((0, 2))
     blocked = False
     for _ in range(steps):
         static = sensor.scan(world, sim.position, none, np.zeros(0))
-        tracker.update(sim.ranges, static, sim.position, ahead)
+        tracker.update(sim.ranges, static, sim.position)
         result = sim.step(walk(blocked))
         blocked = result.blocked
         if result.contact:  # start afresh: a walk stuck in a body teaches little
             sim = Simulator.from_world(world, rng, agent_radius=agent_radius, sensor=sensor)
-            tracker.tracks = []
+            tracker._tracks = []
     return tracker.examples, tracker._radii
 
 
@@ -451,14 +568,15 @@ def sample_motion(  # type: ignore[no-untyped-def]
                 while b < n_turn - 1 and turn_cdf[a, b] < u:
                     b += 1
                 h += -math.pi + (b + np.random.random()) * width
-                sb = 0
-                while sb < n_speed - 1 and v >= speed_edges[sb + 1]:
-                    sb += 1
-                u = np.random.random()
-                b = 0
-                while b < n_speed - 1 and speed_cdf[sb, b] < u:
-                    b += 1
-                v = speed_edges[b] + np.random.random() * (speed_edges[b + 1] - speed_edges[b])
+                if speed_cdf.shape[0] > 1:  # a speed drawn after the last (else: kept)
+                    sb = 0
+                    while sb < n_speed - 1 and v >= speed_edges[sb + 1]:
+                        sb += 1
+                    u = np.random.random()
+                    b = 0
+                    while b < n_speed - 1 and speed_cdf[sb, b] < u:
+                        b += 1
+                    v = speed_edges[b] + np.random.random() * (speed_edges[b + 1] - speed_edges[b])
                 dx = math.cos(h)
                 dy = math.sin(h)
                 go = sweep_one(x, y, dx, dy, local, rk)
@@ -481,6 +599,8 @@ def motion_errors(
     samples: int = 32,
     sensor: RangeSensor | None = None,
     agent_radius: float = 0.3,
+    turns: str = "robust",
+    speeds: str = "keep",
 ) -> dict[str, dict[int, float]]:
     """How far the predicted places of the bodies an agent makes out are from where the
     simulator's record puts them ``horizons`` steps later, on random walks of worlds the
@@ -501,14 +621,17 @@ def motion_errors(
         sim = Simulator.from_world(world, rng, agent_radius=agent_radius, sensor=sensor,
                                    record=True)  # fmt: skip
         walk = RandomWalk(seed=rng)
-        tracker = MotionTracker(sensor.n_rays, sensor.max_range, model=model)
+        prior = model.priors() if model is not None else {"speed": 0.7, "turn_sd": 1.0}
+        tracker = MotionTracker(sensor.n_rays, sensor.max_range, speed=prior["speed"],
+                                turn_sd=prior["turn_sd"])  # fmt: skip
         segs = np.ascontiguousarray(world.segments)
         grid = np.zeros((1, 1))
         states: list[tuple[int, NDArray[np.float64], NDArray[np.float64]]] = []
         blocked = False
         for t in range(steps + H):
             static = sensor.scan(world, sim.position, none, np.zeros(0))
-            rows = tracker.update(sim.ranges, static, sim.position)
+            tracker.update(sim.ranges, static, sim.position)
+            rows = tracker.bodies()
             if t < steps and len(rows):
                 truth = sim.centers.copy()
                 states.append((t, rows.copy(), truth))
@@ -526,8 +649,9 @@ def motion_errors(
                 continue
             rows, match = rows[ok], match[ok]
             if model is not None:
+                tables = motion_tables(model, turns=turns, speeds=speeds)
                 fut = sample_motion(np.ascontiguousarray(rows), segs, samples, H,  # type: ignore[call-arg]
-                                    k * 1000 + t, *_tables(model), grid, 0.0, 0.0, 1.0)  # fmt: skip
+                                    k * 1000 + t, *tables, grid, 0.0, 0.0, 1.0)  # fmt: skip
                 mean = fut.mean(axis=0)
             for h in horizons:
                 if t + h >= len(traces):
@@ -542,9 +666,60 @@ def motion_errors(
             for key, d in errs.items() if key != "model" or model is not None}  # fmt: skip
 
 
-def _tables(model: MotionModel) -> tuple[NDArray[np.float64], ...]:
-    """The cumulative tables and edges :func:`sample_motion` takes, in its order."""
-    return (np.ascontiguousarray(np.cumsum(model.turn_p(), axis=1)),
-            np.ascontiguousarray(np.cumsum(model.speed_p(), axis=1)),
+MOTION_MEMBERS = ("motion_turn", "motion_speed", "motion_start")
+"""The capabilities file's members of a motion model (its radius and statistics are in
+the file's metadata)."""
+
+
+def motion_arrays(model: MotionModel) -> dict[str, NDArray[np.float64]]:
+    """The model's tables as a capabilities file stores them."""
+    return {"motion_turn": model.turn_counts, "motion_speed": model.speed_counts,
+            "motion_start": model.start_counts}  # fmt: skip
+
+
+def motion_from(meta: dict[str, Any], arrays: dict[str, NDArray[Any]]) -> MotionModel | None:
+    """The model a capabilities file holds (None when it holds none), checked
+    (:meth:`MotionModel.check`): a file with part of one, tables of other shapes or
+    values, or a radius out of range is refused."""
+    present = [k for k in MOTION_MEMBERS if k in arrays]
+    entry = meta.get("motion_model")
+    if not present and entry is None:
+        return None
+    if len(present) != len(MOTION_MEMBERS) or not isinstance(entry, dict):
+        raise InvalidArgumentError(
+            f"the motion model is incomplete (members {present}, metadata "
+            f"{'present' if isinstance(entry, dict) else 'missing'})"
+        )
+    radius = entry.get("radius")
+    if not isinstance(radius, int | float) or isinstance(radius, bool):
+        raise InvalidArgumentError(f"the motion model's radius must be a number; got {radius!r}")
+    stats = entry.get("stats", {})
+    return MotionModel(
+        np.asarray(arrays["motion_turn"], dtype=np.float64),
+        np.asarray(arrays["motion_speed"], dtype=np.float64),
+        np.asarray(arrays["motion_start"], dtype=np.float64), float(radius),
+        dict(stats) if isinstance(stats, dict) else {},
+    ).check()
+
+
+def _normal_cdf(x: NDArray[np.float64]) -> NDArray[np.float64]:
+    from scipy.special import ndtr
+
+    return np.asarray(ndtr(x), dtype=np.float64)
+
+
+def motion_tables(
+    model: MotionModel, *, turns: str = "robust", speeds: str = "keep"
+) -> tuple[NDArray[np.float64], ...]:
+    """The cumulative tables and edges :func:`sample_motion` takes, in its order: turns
+    as :meth:`MotionModel.turn_p` gives them (``turns``), and a body's speed kept from
+    step to step (``speeds="keep"``: a row of ones, which the sampler reads so) or drawn
+    after the last (``"drawn"``: the learnt table)."""
+    if speeds not in ("keep", "drawn"):
+        raise InvalidArgumentError(f"speeds must be keep or drawn; got {speeds!r}")
+    speed = (np.ones((1, len(SPEED_EDGES) - 1)) if speeds == "keep"
+             else np.cumsum(model.speed_p(), axis=1))  # fmt: skip
+    return (np.ascontiguousarray(np.cumsum(model.turn_p(turns), axis=1)),
+            np.ascontiguousarray(speed),
             np.ascontiguousarray(np.cumsum(model.start_p())), AHEAD_EDGES.copy(),
             SPEED_EDGES.copy())  # fmt: skip

@@ -22,6 +22,7 @@ from copi.learning._contexts import (
 )
 from copi.learning._explore import explore
 from copi.learning._gng import GrowingNeuralGas
+from copi.learning._motion import learn_motion
 from copi.learning._policies import ActionPriors, AStarLearner, ValueIterationLearner, compass
 from copi.learning._safety import PROBE_LABELS, learn_safety, probe_states
 from copi.learning._skeleton import bootstrap_landmarks, skeletonize
@@ -33,7 +34,7 @@ __all__ = ["LearnParams", "learn", "simulated_steps"]
 
 MOST = {"worlds": 100_000, "steps": 100_000, "workers": 512, "n_rays": 4096,
         "epochs": 1_000, "probe_worlds": 100_000, "probe_steps": 100_000,
-        "probe_horizon": 1_000}  # fmt: skip
+        "probe_horizon": 1_000, "predict_worlds": 100_000, "predict_steps": 100_000}  # fmt: skip
 """The largest value of each count of :class:`LearnParams` (the paper's 100 worlds of 300
 steps, 20 passes; a count beyond these is a typing error, refused before any work)."""
 MOST_READINGS = 10_000_000
@@ -110,6 +111,12 @@ class LearnParams:
     agent is handed): their closeness block then sees only the hits the static map does
     not explain, i.e. what moves. Off by default (the registered preset's networks see
     the reading alone, at every level)."""
+    predict: bool = False
+    """Also learn the model of what moves (the ``predictive`` preset; see
+    :mod:`copi.learning._motion`): from ``predict_worlds`` random walks of
+    ``predict_steps`` steps among moving bodies, in the families of ``probe_families``."""
+    predict_worlds: int = 80
+    predict_steps: int = 200
     motion: bool = False
     """Contexts that see motion: the context map, landmarks, templates and priors live
     on [reading, its change since the last step] (see :mod:`copi.learning._contexts`),
@@ -117,12 +124,12 @@ class LearnParams:
     template's reading block (its static local world)."""
 
     def __post_init__(self) -> None:
-        for name in ("worlds", "steps", "workers", "n_rays", "epochs", "probe_worlds",
-                     "probe_steps", "probe_horizon"):  # fmt: skip
+        for name in MOST:
             positive_int(getattr(self, name), name)
             check_count(int(getattr(self, name)), name, MOST[name])
         for a, b, most in (("worlds", "steps", MOST_READINGS),
-                           ("probe_worlds", "probe_steps", MOST_PROBED)):  # fmt: skip
+                           ("probe_worlds", "probe_steps", MOST_PROBED),
+                           ("predict_worlds", "predict_steps", MOST_PROBED)):  # fmt: skip
             n = int(getattr(self, a)) * int(getattr(self, b))
             if n > most:
                 raise InvalidArgumentError(
@@ -139,7 +146,7 @@ class LearnParams:
             or self.map_seed < 0
         ):  # fmt: skip
             raise InvalidArgumentError(f"map_seed must be an int >= 0; got {self.map_seed!r}")
-        for name in ("safety", "motion", "safety_static"):
+        for name in ("safety", "motion", "safety_static", "predict"):
             if not isinstance(getattr(self, name), bool):
                 raise InvalidArgumentError(
                     f"{name} must be True or False; got {getattr(self, name)!r}"
@@ -193,6 +200,7 @@ def simulated_steps(params: LearnParams | Mapping[str, Any]) -> dict[str, int]:
     p = params
     explore_steps = p.worlds * p.steps
     walks = p.probe_worlds * p.probe_steps if p.safety else 0
+    walks += p.predict_worlds * p.predict_steps if p.predict else 0
     probed = p.probe_worlds * ((p.probe_steps + 1) // 2) if p.safety else 0
     per = p.probe_horizon if p.probe_label == "hold" else 1
     probes = probed * ((p.directions + 1) * per + (2 if p.probe_label == "escape" else 0))
@@ -344,6 +352,16 @@ def learn(params: LearnParams | None = None, *, progress: Progress | None = None
             static_aware=p.safety_static,
         )  # fmt: skip
         stages.append({"stage": "safety", **safety_stats, "seconds": time.perf_counter() - t0})
+    model = None
+    if p.predict:
+        t0 = time.perf_counter()
+        model = learn_motion(
+            tuple(f.strip() for f in p.probe_families.split(",")), p.predict_worlds,
+            p.predict_steps, seed=p.seed, sensor=sensor, agent_radius=p.agent_radius,
+            progress=lambda k, n: report("model of what moves", k, n),
+        )  # fmt: skip
+        stages.append({"stage": "motion model", "examples": model.stats["examples"],
+                       "radius": model.radius, "seconds": time.perf_counter() - t0})  # fmt: skip
     return Capabilities(
         nodes=gng.nodes_,
         edges=gng.edges_,
@@ -353,7 +371,11 @@ def learn(params: LearnParams | None = None, *, progress: Progress | None = None
         policies=policies,
         priors=priors,
         safety=safety,
-        params={k: v for k, v in dataclasses.asdict(p).items()},
+        motion_model=model,
+        # without a model of what moves, its settings are left out: the file is then the
+        # same, byte for byte, as one learnt before the model existed
+        params={k: v for k, v in dataclasses.asdict(p).items()
+                if p.predict or k not in ("predict", "predict_worlds", "predict_steps")},
         stats={
             "stages": _jsonable(stages),
             "quantization_error": float(qe),

@@ -25,7 +25,7 @@ from copi.baselines import (
 from copi.bounds import Clairvoyant, ModelOracle
 from copi.core import Agent
 from copi.methods._registry import REGISTRY, register_method
-from copi.online import CopiAgent, LearntAgent
+from copi.online import CopiAgent, LearntAgent, PredictiveAgent
 
 __all__: list[str] = []
 
@@ -111,6 +111,20 @@ def _register_builtins() -> None:
         summary="TangentBug on the ranges (hand-written)")
     # the model-oracle's planner on what a map-level agent makes out (0.3-3 s an episode,
     # so run apart like model-oracle: --methods tracked-mpc)
+    # copi's learnt parts carrying the decision: one planning decision costs milliseconds,
+    # so run apart like tracked-mpc: --methods copi-predictive
+    reg("copi-predictive", PredictiveAgent, capabilities="predictive", sensing="map",
+        summary="plans its move over futures of what moves drawn from its learnt model "
+        "(learnt once from its own task-free walks; the planner is the model-oracle's), each "
+        "move also costed by the learnt safety network; no hand-written guard")
+    reg("copi-predictive-contexts", PredictiveAgent, capabilities="predictive", sensing="map",
+        ablation=True, params={"beta": 0.5},
+        summary="copi-predictive whose moves also cost what the recognised context's template "
+        "prior says of them (paper §III)")
+    reg("copi-predictive-nonet", PredictiveAgent, capabilities="predictive", sensing="map",
+        ablation=True, params={"alpha": 0.0},
+        summary="copi-predictive without the learnt safety network: the model of what moves "
+        "and the planner alone")
     reg("tracked-mpc", TrackedMPC, sensing="map", default=False,
         summary="model-predictive control (the model-oracle's planner) on the discs it makes "
         "out in its reading (circle fits of the hits the map does not explain, velocities "

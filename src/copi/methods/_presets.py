@@ -68,6 +68,11 @@ PRESETS: dict[str, Preset] = {
                "copi-learnt-motion",
                "the learnt preset with contexts that see motion (the reading and its change) "
                "and the per-template safety priors over them added to each move's score"),
+        Preset("predictive", LearnParams(directions=16, safety=True, safety_static=True,
+                                         predict=True), "copi-predictive",
+               "a learnt model of what moves (from the agent's own task-free walks) that the "
+               "agent plans over, and the learnt safety network telling walls from what "
+               "moves; no hand-written guard"),
     ]
 }  # fmt: skip
 """copi's modes; the README says what each knows and what in it is learnt."""
@@ -87,8 +92,9 @@ def preset(name: str) -> Preset:
         ) from None
 
 
-def _shape(caps: Capabilities) -> tuple[int, bool, bool]:
-    return (int(caps.policies.passable.shape[1]), caps.safety is not None, caps.motion)
+def _shape(caps: Capabilities) -> tuple[int, bool, bool, bool]:
+    return (int(caps.policies.passable.shape[1]), caps.safety is not None, caps.motion,
+            caps.motion_model is not None)  # fmt: skip
 
 
 def preset_of(caps: Capabilities) -> str | None:
@@ -96,16 +102,18 @@ def preset_of(caps: Capabilities) -> str | None:
     contexts they have; None when no preset learns them (e.g. 8 directions)."""
     shape = _shape(caps)
     for name, p in PRESETS.items():
-        if (p.learn.directions, p.learn.safety, p.learn.motion) == shape:
+        if (p.learn.directions, p.learn.safety, p.learn.motion, p.learn.predict) == shape:
             return name
     return None
 
 
-def _describe(shape: tuple[int, bool, bool]) -> str:
-    d, safety, motion = shape
+def _describe(shape: tuple[int, bool, bool, bool]) -> str:
+    d, safety, motion, predict = shape
     parts = [f"{d} directions", "safety priors" if safety else "no safety priors"]
     if motion:
         parts.append("contexts that see motion")
+    if predict:
+        parts.append("a model of what moves")
     return ", ".join(parts)
 
 
@@ -116,7 +124,7 @@ def check_preset_capabilities(
     safety priors, contexts that see motion), with one line saying how to learn the
     right ones. ``who``: the method that needs them (default: the preset)."""
     want = preset(name).learn
-    need = (want.directions, want.safety, want.motion)
+    need = (want.directions, want.safety, want.motion, want.predict)
     have = _shape(caps)
     if have == need:
         return

@@ -11,6 +11,7 @@ from copi.online._causal_map import CausalMap, CausalMapFile
 from copi.online._controller import ContextController, Decision
 from copi.online._learnt import LearntAgent
 from copi.online._mapping import Mapping
+from copi.online._predictive import PredictiveAgent
 from copi.online._strategies import GlobalStrategy, Greedy, Route, make_strategy
 
 __all__ = [
@@ -25,6 +26,7 @@ __all__ = [
     "Greedy",
     "LearntAgent",
     "Mapping",
+    "PredictiveAgent",
     "Route",
     "Steering",
     "make_strategy",

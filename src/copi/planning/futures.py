@@ -241,15 +241,16 @@ def window(ok, mid_ok, terminal, goal, i0, j0, n):  # type: ignore[no-untyped-de
 @njit(cache=True)
 def escape_move(  # type: ignore[no-untyped-def]
     px, py, gx, gy, tol, r, segs, samples, radii, moves, margin, escape_margin, V, x0, y0,
-    res, loss, dist, fx0, fy0, fh, extra,
+    res, loss, dist, fx0, fy0, fh, extra, costs,
 ):
     """The first move of least expected cost, counting as lost each sample in which the
     move is in contact, or leaves no second move clear of that sample's next step by
     ``escape_margin`` more (the agent, replanning, sees where the discs went but not yet
     where they go next: the margin stands for that). Cost: ``loss`` times the share
     lost, plus one step, plus the window's value ``V`` (step 1) after the move, plus
-    ``extra[m]`` (a cost of the move's own: zeros for the oracle). Returns (move, cost,
-    share of samples the move is in contact with)."""
+    ``extra[m]`` (a cost of the move's own: zeros for the oracle); each move's cost goes
+    into ``costs[m]`` (inf for one a wall stops). Returns (move, cost, share of samples the
+    move is in contact with)."""
     n_s = samples.shape[0]
     d = samples.shape[2]
     n_m = moves.shape[0]
@@ -268,6 +269,7 @@ def escape_move(  # type: ignore[no-untyped-def]
     best_cost = np.inf
     best_hit = 1.0
     for m in range(n_m):
+        costs[m] = np.inf
         dx = moves[m, 0]
         dy = moves[m, 1]
         length = math.sqrt(dx * dx + dy * dy)
@@ -306,6 +308,7 @@ def escape_move(  # type: ignore[no-untyped-def]
             if not math.isfinite(v):
                 v = samples.shape[1] - 2 + field_at(dist, fx0, fy0, fh, qx, qy, gx, gy)
             cost += v
+        costs[m] = cost
         if cost < best_cost:
             best = m
             best_cost = cost
@@ -452,6 +455,8 @@ class FuturesPlanner:
         self.escape = float(escape)
         self.moves, _ = compass_moves()
         self.no_cost = np.zeros(len(self.moves))
+        self.costs = np.full(len(self.moves), np.inf)
+        """Each move's expected cost at the last plan (inf: a wall stops it), steps."""
 
     @property
     def steps(self) -> int:
@@ -536,6 +541,6 @@ class FuturesPlanner:
         m, _, risk = escape_move(
             p[0], p[1], self.goal[0], self.goal[1], self.tol, self.r, self.segs, samples,
             radii, self.moves, self.margin, self.escape, V, wx0, wy0, RES, self.loss,
-            f.dist, f.x0, f.y0, f.h, self.no_cost if extra is None else extra,
+            f.dist, f.x0, f.y0, f.h, self.no_cost if extra is None else extra, self.costs,
         )  # fmt: skip
         return int(m), float(risk)

@@ -29,7 +29,7 @@ from copi.core import (
 from copi.errors import InvalidArgumentError
 from copi.learning import Capabilities
 from copi.methods import make_agent, method_spec
-from copi.online import CopiAgent, LearntAgent
+from copi.online import CopiAgent, LearntAgent, PredictiveAgent
 from copi.runs import EpisodeOutcome, draw_episode, run_episode
 from copi.world import Simulator, rasterize
 
@@ -57,6 +57,9 @@ class Step:
     candidates: NDArray[np.float64]
     """copi's candidate first moves in the world frame, shape (k, 2) (empty for
     baselines)."""
+    futures: NDArray[np.float64] | None = None
+    """What copi-predictive expected of the moving bodies it made out: a few of the
+    futures it planned over, (samples, steps + 1, bodies, 2); None for the others."""
 
 
 @dataclass(frozen=True)
@@ -114,6 +117,28 @@ class _Explaining(Agent):
                 f"policy {choice} in the template's frame (of {options}){where}"
             )
             cands = d.candidate_actions
+        elif isinstance(agent, PredictiveAgent):
+            agent.explain = True
+            action = np.asarray(agent.act(obs), dtype=np.float64)
+            e = agent.last_explained
+            assert e is not None
+            costs = e["costs"]
+            ok = np.isfinite(costs)
+            moves = agent.planner.moves
+            order = np.argsort(np.where(ok, costs, np.inf), kind="stable")[: min(3, int(ok.sum()))]
+            best = ", ".join(("wait" if not moves[i].any() else
+                              f"{_heading(moves[i])} x{np.hypot(*moves[i]):.1f}") +
+                             f" {costs[i]:.1f}" for i in order)  # fmt: skip
+            did = "waits" if e["waits"] else f"moves {_heading(action)}"
+            text = (
+                f"{len(e['bodies'])} bodies made out; {agent.samples} futures of "
+                f"{agent.planner.horizon} steps drawn from the learnt model (pink); "
+                f"{did}, {100 * e['risk']:.0f} % of futures in contact\n"
+                f"expected cost (steps) of the best moves: {best}"
+            )
+            cands = moves[ok & np.any(moves != 0, axis=1)]
+            self.steps.append(Step(obs.ranges.copy(), action, text, cands, e["futures"]))
+            return action
         elif isinstance(agent, LearntAgent):
             agent.explain = True
             action = np.asarray(agent.act(obs), dtype=np.float64)
@@ -272,15 +297,17 @@ def _frame(watched: WatchedEpisode, t: int, path: Any, traces: Any, size: int) -
         ranges = watched.steps[t].ranges
     else:  # after the last step: what the sensor reads there
         ranges = sim.sensor.scan(sim.world, path[t], traces[t], sim.radii)
-    moves = None
+    moves = futures = None
     if t < len(watched.steps):
         moves = (watched.steps[t].candidates, watched.steps[t].action)
+        futures = watched.steps[t].futures
     xmin, ymin, xmax, ymax = sim.world.bounds
     height = round(size * min(1.25, max(0.6, (ymax - ymin) / max(xmax - xmin, 1e-9))))
     picture = rasterize(
         sim.world, width=size, height=height, centers=traces[t], radii=sim.radii,
         traces=traces[: t + 1], path=path[: t + 1], agent_radius=sim.agent_radius,
         start=path[0], goal=sim.goal, rays=(path[t], ranges, sim.sensor.angles), moves=moves,
+        futures=futures,
     )  # fmt: skip
     font_px = max(10, size // 36)
     line_h = int(font_px * 1.35)

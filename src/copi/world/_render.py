@@ -24,6 +24,7 @@ OBSTACLE = "#3b6fb6"
 AGENT = "#d62728"
 GOAL = "#2ca02c"
 RAY = "#f0a030"
+FUTURE = "#f2a7c3"
 PURSUER = "#222222"
 MOVE = "#444444"
 CHOSEN = "#7b2cbf"
@@ -137,6 +138,7 @@ def rasterize(
     pursuer: tuple[Any, float, float] | None = None,
     pursuer_path: Any = None,
     moves: tuple[Any, Any] | None = None,
+    futures: Any = None,
     supersample: int | None = None,
 ) -> NDArray[np.uint8]:
     """Draw a world and an episode's state into an RGB image, without Matplotlib.
@@ -170,6 +172,9 @@ def rasterize(
     moves : (candidates (k, 2), chosen (2,)), optional
         Moves the agent could make from where it stands (dark grey lines) and the one it
         made (a thick purple line), drawn three times their length.
+    futures : (s, t, d, 2), optional
+        Futures of the moving obstacles an agent expected (``s`` samples of ``t`` steps of
+        ``d`` bodies): thin pink lines, one per sample and body.
     supersample : int, optional
         Drawing scale before the reduction (anti-aliasing); default 4 below 200 pixels,
         else 2.
@@ -227,6 +232,12 @@ def rasterize(
         r = np.broadcast_to(np.asarray(radii if radii is not None else 0.5, dtype=float), (len(c),))
         for ck, rk in zip(c, r, strict=True):
             disc(ck, float(rk), OBSTACLE)
+    if futures is not None:
+        fu = np.asarray(futures, dtype=np.float64)
+        if fu.ndim == 4 and fu.shape[1] > 1:
+            for smp in fu:
+                for k in range(fu.shape[2]):
+                    draw.line(px(smp[:, k]), fill=FUTURE, width=line)
     if pursuer_path is not None and len(pursuer_path) > 1:
         draw.line(px(pursuer_path), fill="#777777", width=line)
     if rays is not None:

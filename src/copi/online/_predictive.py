@@ -1,0 +1,182 @@
+"""``copi-predictive``: copi's learnt parts carry the decision, with no hand-written guard.
+
+Each step the agent follows what moves in its reading (:class:`copi.learning.MotionTracker`),
+draws futures of it from its learnt model of what moves (:func:`copi.learning.sample_motion`,
+learnt once, without any task, from its own walks: :mod:`copi.learning._motion`), and
+plans its move over them (:class:`copi.planning.futures.FuturesPlanner`, the planner the
+model-oracle runs on the true motion model), each move also costing what the learnt
+safety network says of it (the network over the reading turned to the move, shared by
+every direction through the symmetry group: paper §II-C, §II-D) and, with ``beta``, what
+the template of the recognised context says of it (§III). Nothing in the decision is a
+hand-written rule about obstacles: the simulator's tests of walls and contacts are what
+the planner checks its moves with, against futures the agent learnt to expect.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from copi.core import Agent, Observation, Sensing, Task, check_sensing
+from copi.errors import InvalidArgumentError
+from copi.learning import Capabilities, MotionTracker, motion_tables, sample_motion
+from copi.learning.kernels import kernel_net, safety_probabilities
+from copi.online._learnt import node_priors
+from copi.planning.futures import FuturesPlanner
+
+__all__ = ["PredictiveAgent"]
+
+
+class PredictiveAgent(Agent):
+    """copi's ``predictive`` preset as an :class:`~copi.core.Agent` (level ``map``: it
+    tells what moves from what the static map alone would read).
+
+    The move minimises, over the learnt model's ``samples`` futures of ``horizon``
+    steps, the planner's expected cost (:class:`~copi.planning.futures.FuturesPlanner`:
+    ``loss`` for a future in which it is lost, one step a move, the steps still to go),
+    plus ``alpha`` times minus the log of the safety network's P(safe) of its direction
+    (or of waiting), plus ``beta`` times minus the log of the recognised template's
+    prior of that direction (read through the context's symmetry).
+
+    Parameters
+    ----------
+    capabilities : Capabilities
+        Learnt with a model of what moves and safety priors (``copi learn --preset
+        predictive``).
+    samples, horizon, loss, margin, escape : see :class:`FuturesPlanner`.
+    alpha, beta : float
+        Weights, in steps, of the learnt safety network and of the template priors.
+    seed : int
+        Seeds the futures drawn (the same episode, the same moves).
+    """
+
+    sensing: Sensing = "map"
+    steers_itself = True  # it plans on the static world itself
+
+    def __init__(
+        self,
+        capabilities: Capabilities,
+        *,
+        name: str = "copi-predictive",
+        samples: int = 32,
+        horizon: int = 14,
+        alpha: float = 1.0,
+        beta: float = 0.0,
+        loss: float = 200.0,
+        margin: float = 0.1,
+        escape: float = 0.1,
+        seed: int = 0,
+    ) -> None:
+        if capabilities.motion_model is None or capabilities.safety is None:
+            raise InvalidArgumentError(
+                "these capabilities have no model of what moves (or no safety network), "
+                "which copi-predictive plans with: learn them with copi learn --preset "
+                "predictive"
+            )
+        if int(samples) != samples or not 1 <= samples <= 256:
+            raise InvalidArgumentError(f"samples must be a whole number in 1 .. 256; got "
+                                       f"{samples!r}")  # fmt: skip
+        for key, v in (("alpha", alpha), ("beta", beta)):
+            if not (isinstance(v, int | float) and math.isfinite(v) and 0 <= v <= 1e3):
+                raise InvalidArgumentError(f"{key} must be a number in [0, 1000]; got {v!r}")
+        self.planner = FuturesPlanner(horizon=horizon, loss=loss, margin=margin, escape=escape)
+        self.capabilities = capabilities
+        self.name = name
+        self.samples = int(samples)
+        self.alpha = float(alpha)
+        self.beta = float(beta)
+        self.seed = int(seed)
+        self.model = capabilities.motion_model
+        self._tables = motion_tables(self.model)
+        self._net = kernel_net(capabilities.safety.net)
+        self._static_aware = capabilities.safety.static_aware
+        n_dir = capabilities.safety.template_safe.shape[1]
+        moves = self.planner.moves
+        if len(moves) != 2 * n_dir + 1:
+            raise InvalidArgumentError(f"the capabilities have {n_dir} directions; the planner "
+                                       f"moves in {(len(moves) - 1) // 2}")  # fmt: skip
+        # each planner move's direction among the safety network's (the last: waiting)
+        self._dir_of = np.concatenate([np.arange(n_dir), np.arange(n_dir), [n_dir]])
+        self._prior = node_priors(capabilities, capabilities.safety) if beta > 0 else None
+        self._feat = np.empty(8 * capabilities.n_rays)
+        self._p = np.empty(n_dir + 1)
+        self.explain = False
+        """Keep what each decision rested on in :attr:`last_explained` (copi watch)."""
+        self.last_explained: dict[str, Any] | None = None
+
+    def reset(self, task: Task) -> None:
+        check_sensing(task.sensing, self.sensing, method=self.name)
+        if task.world is None or task.goal is None:
+            raise InvalidArgumentError(f"{self.name} needs the world and the goal (level "
+                                       f"'map'); got a task at {task.sensing!r} without "
+                                       "them")  # fmt: skip
+        if task.n_rays != self.capabilities.n_rays:
+            raise InvalidArgumentError(
+                f"the capabilities were learnt for {self.capabilities.n_rays} rays; the "
+                f"sensor has {task.n_rays}"
+            )
+        self.planner.reset(task.world, np.asarray(task.goal, dtype=np.float64),
+                           float(task.agent_radius), float(task.goal_tolerance))  # fmt: skip
+        prior = self.model.priors()  # learnt, where a hand-written tracker sets its own
+        self.tracker = MotionTracker(task.n_rays, task.max_range, speed=prior["speed"],
+                                     turn_sd=prior["turn_sd"])  # fmt: skip
+        self.rng = np.random.default_rng(self.seed)
+        self._prev: NDArray[np.float64] | None = None
+        self._bodies: list[int] = []
+        self._risks: list[float] = []
+        self.n_waits = 0
+
+    def move_costs(self, obs: Observation) -> NDArray[np.float64]:
+        """What the learnt safety network (and with ``beta``, the template prior) adds
+        to each of the planner's moves, in steps."""
+        s = np.asarray(obs.ranges, dtype=np.float64)
+        prev = s if self._prev is None else self._prev
+        static = (np.asarray(obs.static, dtype=np.float64)
+                  if self._static_aware and obs.static is not None
+                  else np.full(len(s), np.inf))  # fmt: skip
+        n_dir = len(self._p) - 1
+        safety_probabilities(s, prev, static, self._net, n_dir, self._feat, self._p)
+        cost = -self.alpha * np.log(np.maximum(self._p, 1e-6))
+        if self._prior is not None:
+            caps = self.capabilities
+            q = caps.contexts(s, prev)
+            node = int(np.argmin(((caps.nodes - q) ** 2).sum(axis=1)))
+            prior = np.append(self._prior[node], 1.0)  # waiting: no prior
+            cost = cost - self.beta * np.log(np.maximum(prior, 1e-6))
+        return np.ascontiguousarray(cost[self._dir_of])
+
+    def act(self, obs: Observation) -> NDArray[np.float64]:
+        if obs.position is None or obs.static is None:
+            raise InvalidArgumentError(f"{self.name} needs its position and the static "
+                                       "reading (level 'map')")  # fmt: skip
+        self.tracker.update(obs.ranges, obs.static, obs.position)
+        bodies = np.ascontiguousarray(self.tracker.bodies())
+        pl = self.planner
+        f = pl.field
+        seed = int(self.rng.integers(2**31 - 1))
+        futures = sample_motion(bodies, pl.segs, self.samples, pl.steps, seed,  # type: ignore[call-arg]
+                                *self._tables, pl.clear, f.x0, f.y0, pl.fine)  # fmt: skip
+        radii = np.ascontiguousarray(bodies[:, 5])
+        extra = self.move_costs(obs)
+        m, risk = pl.plan(np.asarray(obs.position, dtype=np.float64), futures, radii, extra)
+        self._prev = np.asarray(obs.ranges, dtype=np.float64).copy()
+        self._bodies.append(len(bodies))
+        self._risks.append(risk)
+        self.n_waits += m == len(pl.moves) - 1
+        move = np.zeros(2) if m < 0 else pl.moves[m].copy()
+        if self.explain:  # for copi watch: the futures it expected and what it chose
+            self.last_explained = {"bodies": bodies.copy(), "futures": futures[:8].copy(),
+                                   "move": move, "costs": pl.costs.copy(),
+                                   "extra": extra.copy(), "risk": risk,
+                                   "waits": m == len(pl.moves) - 1}  # fmt: skip
+        return move
+
+    def counters(self) -> dict[str, Any]:
+        """Per-episode diagnostics stored with the result."""
+        b, r = self._bodies, self._risks
+        return {"mean_bodies": float(np.mean(b)) if b else 0.0,
+                "mean_risk": float(np.mean(r)) if r else 0.0,
+                "waits": int(self.n_waits)}  # fmt: skip

@@ -1,0 +1,115 @@
+"""copi-predictive: the learnt parts carry the decision, no hand-written guard."""
+
+from __future__ import annotations
+
+import copy
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import copi.baselines._simple
+import copi.online._learnt_kernels
+import copi.online.kernels
+from copi.learning import Capabilities
+from copi.methods import make_agent
+from copi.online import PredictiveAgent
+from copi.runs import draw_episode, run_episode
+from copi.testing import check_agent
+from tests.cli.test_faults import _one_line_error, run
+
+GUARDED = (copi.online.kernels, copi.online._learnt_kernels, copi.baselines._simple)
+"""Where copi's hand-written guard lives: the chain's kernels (its verdicts and escape),
+the learnt preset's guarded decision, compass-guard."""
+
+
+def test_no_guard_code_runs(predictive_caps: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every function of the guard's modules replaced by one that fails: episodes of
+    copi-predictive in a crowd still run to their end."""
+    caps = Capabilities.load(predictive_caps)
+
+    def guard(*args: object, **kwargs: object) -> None:
+        raise AssertionError("the hand-written guard was called")
+
+    replaced = 0
+    for module in GUARDED:
+        for name, value in list(vars(module).items()):
+            if callable(value) and getattr(value, "__module__", "") == module.__name__:
+                monkeypatch.setattr(module, name, guard)
+                replaced += 1
+    assert replaced >= 10
+    with pytest.raises(Exception, match="guard was called"):
+        run_episode(make_agent("compass-guard"), draw_episode("crowd", 0, 1), sensing="map",
+                    max_steps=50)  # the stand-ins bite  # fmt: skip
+    for k in range(3):
+        out = run_episode(PredictiveAgent(caps), draw_episode("crowd", k, 1), sensing="map",
+                          max_steps=200)  # fmt: skip
+        assert out.outcome in ("success", "collision", "timeout") and out.steps > 0
+
+
+def test_the_same_episode_gives_the_same_moves(predictive_caps: Path) -> None:
+    caps = Capabilities.load(predictive_caps)
+    sim = draw_episode("crowd", 2, 1)
+    a = run_episode(PredictiveAgent(caps), copy.deepcopy(sim), sensing="map", max_steps=120)
+    b = run_episode(PredictiveAgent(caps), copy.deepcopy(sim), sensing="map", max_steps=120)
+    assert (a.outcome, a.steps, a.path_length) == (b.outcome, b.steps, b.path_length)
+
+
+def test_it_keeps_the_agent_contract(predictive_caps: Path) -> None:
+    caps = Capabilities.load(predictive_caps)
+    check_agent(lambda: PredictiveAgent(caps), episodes=2)
+
+
+def test_it_waits_rather_than_walk_into_a_body_crossing_its_way(predictive_caps: Path) -> None:
+    """A corridor; a body crossing it just ahead: the futures say where it will be, and the
+    agent lets it pass (no contact), then goes on to the goal."""
+    from copi.world import ObstacleSpec, Simulator, World
+
+    caps = Capabilities.load(predictive_caps)
+    hall = World([[0, 0], [30, 0], [30, 12], [0, 12]], start=[3, 6], goal=[27, 6])
+    outcomes = []
+    for seed in range(4):
+        sim = Simulator.from_world(hall, seed, obstacles=ObstacleSpec(count=(3, 3), speed=0.6))
+        outcomes.append(run_episode(PredictiveAgent(caps), sim, sensing="map",
+                                    max_steps=200).outcome)  # fmt: skip
+    assert outcomes.count("success") >= 3, outcomes
+
+
+def test_what_it_cannot_run_on_is_one_line(
+    predictive_caps: Path, learnt_caps: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = str(tmp_path / "r.sqlite")
+    msg = _one_line_error(*run(["evaluate", str(predictive_caps), "--method", "copi-predictive",
+                                "--sensing", "sensor", "-o", out, "--worlds", "1"],
+                               capsys)[::2])  # fmt: skip
+    assert "copi-predictive needs sensing level 'map' or above" in msg
+    msg = _one_line_error(*run(["evaluate", str(learnt_caps), "--method", "copi-predictive",
+                                "-o", out, "--worlds", "1"], capsys)[::2])  # fmt: skip
+    assert "a model of what moves" in msg and "copi learn --preset predictive" in msg
+    with pytest.raises(ValueError, match="no model of what moves"):
+        PredictiveAgent(Capabilities.load(learnt_caps))
+    assert not Path(out).exists()
+
+
+def test_watch_draws_what_it_expected(predictive_caps: Path, tmp_path: Path) -> None:
+    from copi.reports import save_watch, watch_episode
+
+    caps = Capabilities.load(predictive_caps)
+    watched = watch_episode("copi-predictive", caps, family="crowd", episode=1, seed=1,
+                            max_steps=30)  # fmt: skip
+    step = watched.steps[0]
+    assert "futures of 14 steps drawn from the learnt model" in step.text
+    assert "expected cost (steps) of the best moves" in step.text
+    assert step.futures is not None and step.futures.shape[1] == 15
+    assert step.futures.shape[2] >= 1  # the bodies it made out
+    plain = save_watch(watched, tmp_path / "ep.png")
+    from PIL import Image
+
+    pixels = np.asarray(Image.open(plain).convert("RGB")).reshape(-1, 3)
+    pink = np.all(np.abs(pixels.astype(int) - (0xF2, 0xA7, 0xC3)) < 12, axis=1)
+    assert pink.sum() == 0  # the last frame: the episode is over, no futures drawn
+    from copi.reports._watch import _frame
+
+    first = _frame(watched, 0, np.asarray(watched.sim.path), np.asarray(watched.sim.traces), 480)
+    pink = np.all(np.abs(first.reshape(-1, 3).astype(int) - (0xF2, 0xA7, 0xC3)) < 12, axis=1)
+    assert pink.sum() > 20  # the first: the futures it expected, drawn

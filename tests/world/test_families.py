@@ -34,7 +34,8 @@ def _world(family: str, k: int, seed: int = 0) -> tuple[World, np.random.Generat
 
 
 def test_families_are_named_and_sorted() -> None:
-    assert FAMILIES == ("crowd", "indoor", "maps", "polygon", "star")
+    assert FAMILIES == ("circle-crossing", "crowd", "indoor", "maps", "polygon",
+                        "square-crossing", "star")
     assert list(FAMILIES) == sorted(FAMILIES)
 
 

@@ -48,13 +48,26 @@ class NavgroundAgent(Agent):
     safety_margin : float
         navground's safety margin, agent steps.
     horizon : float
-        navground's time horizon, steps.
+        How far around the agent navground's behaviour looks, agent steps (navground's
+        ``horizon`` is a distance).
+    time_horizon : float, optional
+        ORCA's and HRVO's time horizon, steps (None: navground's own, 10).
+    neighbours : int, optional
+        The most neighbours ORCA or HRVO considers (None: navground's own, all of them).
     """
 
     sensing = "oracle"
     steers_itself = True
 
-    def __init__(self, behavior: str, *, safety_margin: float = 0.3, horizon: float = 5.0) -> None:
+    def __init__(
+        self,
+        behavior: str,
+        *,
+        safety_margin: float = 0.3,
+        horizon: float = 5.0,
+        time_horizon: float | None = None,
+        neighbours: int | None = None,
+    ) -> None:
         if not navground_available():
             raise NavgroundMissingError(
                 "navground is not installed: pip install 'copi[peers]' (or navground) "
@@ -69,6 +82,11 @@ class NavgroundAgent(Agent):
         self.name = names[behavior]
         self.safety_margin = float(safety_margin)
         self.horizon = float(horizon)
+        for key, v in (("time_horizon", time_horizon), ("neighbours", neighbours)):
+            if v is not None and not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
+                raise InvalidArgumentError(f"{key} must be a positive number or None; got {v!r}")
+        self.time_horizon = time_horizon
+        self.neighbours = neighbours
 
     def reset(self, task: Task) -> None:
         check_sensing(task.sensing, self.sensing, method=self.name)
@@ -86,6 +104,10 @@ class NavgroundAgent(Agent):
         b.optimal_speed = 1.0
         b.horizon = self.horizon
         b.safety_margin = self.safety_margin
+        if self.time_horizon is not None and hasattr(b, "time_horizon"):
+            b.time_horizon = float(self.time_horizon)
+        if self.neighbours is not None and self.behavior in ("ORCA", "HRVO"):
+            b.set("max_neighbors", int(self.neighbours))
         segs = task.world.segments
         b.environment_state.line_obstacles = [
             core.LineSegment(np.array(s[:2]), np.array(s[2:])) for s in np.asarray(segs)

@@ -201,7 +201,7 @@ def benchmark_command(
     from copi.experiments.benchmark import BenchmarkConfig, ensure_capabilities, run_benchmark
     from copi.methods import method_spec, parse_methods
     from copi.reports import write_benchmark_report
-    from copi.world import BENCHMARK_FAMILIES, check_family, family_inputs
+    from copi.world import BENCHMARK_FAMILIES, check_family, family_inputs, family_spec
 
     if world_file is not None and families is not None:
         raise CopiError("--world-file and --families do not go together: the world file's "
@@ -234,7 +234,8 @@ def benchmark_command(
         if against not in {r.method for r in chosen}:
             raise CopiError(f"--against {against}: it is not among the methods run "
                             f"({', '.join(dict.fromkeys(r.method for r in chosen))})")  # fmt: skip
-    n = episodes if episodes is not None else (30 if quick else 1000)
+    own = [s.episodes for f in fams if (s := family_spec(f).episode) is not None and s.episodes]
+    n = episodes if episodes is not None else (30 if quick else min([1000, *own]))
     check_outputs(
         {"the benchmark's directory": (output, "directory"),
          "the results store": (output / "benchmark.sqlite", "results"),

@@ -308,6 +308,21 @@ def step_world(  # type: ignore[no-untyped-def]
                 moved = True
                 break
         headings[k] = h if moved else headings[k]
+    return step_agent(agent, action, agent_radius, segs, old, centers, radii, cos, sin,
+                      max_range, ranges)  # fmt: skip
+
+
+@njit(cache=True)
+def step_agent(  # type: ignore[no-untyped-def]
+    agent, action, agent_radius, segs, old, centers, radii, cos, sin, max_range, ranges
+):
+    """The agent's half of a time step, in place: it moves by ``action`` (already clipped),
+    stopped by walls, while each obstacle moves linearly from ``old`` to ``centers``;
+    contact is the closest approach of the two motions against the sum of radii; then the
+    sensor scans from the new position into ``ranges``. Returns (blocked, contact, min_gap),
+    min_gap the least surface distance to an obstacle over the step (negative on contact).
+    """
+    n_obs = radii.shape[0]
     ax0 = agent[0]
     ay0 = agent[1]
     x, y, blocked = move_one(ax0, ay0, action[0], action[1], segs, agent_radius)

@@ -12,11 +12,7 @@ from copi.learning._capabilities import FORMAT_VERSION, Capabilities
 from copi.learning._explore import Exploration, explore
 from copi.learning._gng import GrowingNeuralGas
 from copi.learning._motion import (
-    WELL,
     MotionModel,
-    MotionTracker,
-    detect_discs,
-    fit_circle,
     learn_motion,
     motion_errors,
     motion_tables,
@@ -49,6 +45,7 @@ from copi.learning._symmetry import (
     reduce_landmarks,
     ring_operators,
 )
+from copi.learning._tracking import WELL, MotionTracker, detect_discs, fit_circle
 
 __all__ = [
     "AStarLearner",

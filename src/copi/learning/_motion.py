@@ -41,22 +41,17 @@ from numba import njit
 from numpy.typing import NDArray
 
 from copi._validation import positive_int
-from copi.core import EXPLAINED
 from copi.errors import InvalidArgumentError
-from copi.geometry import ring_angles
 from copi.geometry.kernels import local_segments, sweep_one
+from copi.learning._tracking import MAD, MotionTracker
 from copi.world import RandomWalk, RangeSensor, Simulator, random_world, sample_world
 
 __all__ = [
     "AHEAD_EDGES",
     "MOTION_MEMBERS",
-    "WELL",
     "MotionModel",
-    "MotionTracker",
     "N_TURN",
     "SPEED_EDGES",
-    "detect_discs",
-    "fit_circle",
     "learn_motion",
     "motion_arrays",
     "motion_errors",
@@ -64,13 +59,6 @@ __all__ = [
     "motion_tables",
     "sample_motion",
 ]
-
-RADII = (0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0)
-"""Radii tried on an arc of :data:`WELL` rays or more."""
-JOIN = 0.8
-"""Neighbouring hits farther apart than this belong to different bodies."""
-WELL = 3
-"""Rays on a body for its fit (and its displacement) to count as measured."""
 
 N_TURN = 36
 """Bins of a turn in [-pi, pi] (10 degrees each)."""
@@ -81,79 +69,6 @@ AHEAD_EDGES = np.array([0.0, 0.8, 1.6, 3.2, np.inf])
 GATE = 1.6
 """Farthest a body is taken to have moved in one step when it is followed with no model
 (learning): the fastest body, 1, and what a fit may be off by."""
-
-
-def fit_circle(
-    pts: NDArray[np.float64], r: float, c0: NDArray[np.float64]
-) -> tuple[NDArray[np.float64], float]:
-    """Centre of the circle of radius ``r`` through ``pts`` (Gauss-Newton from ``c0``) and
-    its mean squared residual. Eight Gauss-Newton steps written out, because
-    scipy.optimize.least_squares costs more to call than this whole fit of a few points."""
-    c = c0.copy()
-    for _ in range(8):
-        d = pts - c
-        n = np.sqrt((d**2).sum(axis=1)) + 1e-12
-        jac = -d / n[:, None]
-        step = np.linalg.lstsq(jac, -(n - r), rcond=None)[0]
-        c = c + step
-    d = pts - c
-    return c, float(((np.sqrt((d**2).sum(axis=1)) - r) ** 2).mean())
-
-
-def detect_discs(
-    ranges: NDArray[np.float64],
-    static: NDArray[np.float64],
-    position: NDArray[np.float64],
-    unit: NDArray[np.float64],
-    max_range: float,
-    radii_seen: list[float],
-) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
-    """The moving bodies of one reading: centres (k, 2), radii (k,) and the rays on each.
-
-    Hits nearer than the static reading by more than :data:`copi.core.EXPLAINED` form
-    arcs of neighbouring rays (less than :data:`JOIN` apart; the arc across ray 0 is
-    one). An arc of :data:`WELL` rays or more is fitted by a circle (each radius of
-    :data:`RADII` tried, the best fit kept; its radius is appended to ``radii_seen``);
-    a shorter one is taken for a body of the mean radius seen so far (0.75 before any)
-    behind its middle hit. ``unit``: the rays' directions (n_rays, 2)."""
-    s, st = ranges, static
-    n = len(s)
-    hits = position + s[:, None] * unit
-    idx = np.flatnonzero((s < st - EXPLAINED) & (s < max_range - 1e-9))
-    if idx.size == 0:
-        return np.zeros((0, 2)), np.zeros(0), np.zeros(0, dtype=np.int64)
-    arcs: list[list[int]] = []
-    cur = [int(idx[0])]
-    for a, b in zip(idx[:-1], idx[1:], strict=True):
-        if b == a + 1 and math.dist(hits[a], hits[b]) < JOIN:
-            cur.append(int(b))
-        else:
-            arcs.append(cur)
-            cur = [int(b)]
-    arcs.append(cur)
-    if (len(arcs) > 1 and arcs[0][0] == 0 and arcs[-1][-1] == n - 1
-            and math.dist(hits[0], hits[n - 1]) < JOIN):  # fmt: skip
-        arcs[0] = arcs.pop() + arcs[0]  # the arc across ray 0
-    centres, radii = [], []
-    for arc in arcs:
-        mid = arc[len(arc) // 2]
-        behind = s[mid]  # the centre lies beyond the middle hit
-        best: tuple[NDArray[np.float64], float, float] | None = None
-        short = float(np.mean(radii_seen)) if radii_seen else 0.75
-        for r in RADII if len(arc) >= WELL else (short,):
-            c0 = hits[mid] + r * unit[mid]
-            c, err = fit_circle(hits[arc], r, c0) if len(arc) > 1 else (c0, 0.0)
-            if math.dist(c, position) < behind:
-                c, err = c0, math.inf
-            if best is None or err < best[2] - 1e-9:
-                best = (c, r, err)
-        assert best is not None
-        centres.append(best[0])
-        radii.append(best[1])
-        if len(arc) >= WELL:
-            radii_seen.append(best[1])
-    return (np.array(centres), np.array(radii),
-            np.array([len(a) for a in arcs], dtype=np.int64))  # fmt: skip
 
 
 def _wrap(a: float) -> float:
@@ -261,176 +176,6 @@ class MotionModel:
                 f"the motion model's radius must be in 0.05 .. 5; got {self.radius!r}"
             )
         return self
-
-
-MIN_SPEED_SAMPLES = 5
-MIN_TURN_SAMPLES = 20
-MAD = 1.4826
-"""Standard deviation over median absolute deviation, for a normal law."""
-
-
-class MotionTracker:
-    """The moving bodies of a ``map``-level agent's readings, followed from step to step.
-
-    Each reading's bodies (:func:`detect_discs`) are matched to the last step's: a body
-    moves ``speed`` a step whichever way it turned, so of the last step's bodies one
-    ``speed`` away (within 0.5), the nearest to its predicted place first. A body's
-    velocity is its displacement's direction at the estimated speed; one matched to
-    nothing, or that barely moved (0.2 or less), has velocity zero (its heading unknown).
-
-    ``speed`` is the median displacement of bodies measured well twice running
-    (:data:`WELL` rays or more each time), ``turn_sd`` the robust spread (1.4826 times
-    the median absolute value) of the heading change between two such displacements in a
-    row; until enough have been seen (5 and 20) the priors stand, the values given (a
-    learnt :class:`MotionModel` gives its own: :meth:`MotionModel.priors`).
-
-    With ``ahead`` (learning: the room a body has before a wall along its heading, from
-    the static map), every body followed over three well-measured readings whose match
-    had no other candidate is an example of how bodies move, kept in :attr:`examples`.
-
-    Examples
-    --------
-    >>> from copi.world import RangeSensor, World
-    >>> room = World([[0, 0], [20, 0], [20, 20], [0, 20]])
-    >>> sensor, me = RangeSensor(), np.array([10.0, 10.0])
-    >>> static = sensor.scan(room, me, np.zeros((0, 2)), np.zeros(0))
-    >>> ranges = sensor.scan(room, me, np.array([[13.0, 10.0]]), np.array([0.8]))
-    >>> t = MotionTracker(sensor.n_rays, sensor.max_range)
-    >>> centres, radii, rays = t.detect(ranges, static, me)
-    >>> np.round(centres, 2).tolist(), np.round(radii, 1).tolist(), rays.tolist()
-    ([[13.0, 10.0]], [0.8], [3])
-    """
-
-    def __init__(
-        self,
-        n_rays: int,
-        max_range: float,
-        *,
-        speed: float = 0.7,
-        turn_sd: float = 1.0,
-        ahead: Callable[[NDArray[np.float64], float, float], float] | None = None,
-    ) -> None:
-        for key, v in (("speed", speed), ("turn_sd", turn_sd), ("max_range", max_range)):
-            if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
-                raise InvalidArgumentError(f"{key} must be a positive number; got {v!r}")
-        if int(n_rays) != n_rays or n_rays < 4:
-            raise InvalidArgumentError(f"n_rays must be a whole number >= 4; got {n_rays!r}")
-        self.n_rays = int(n_rays)
-        self.max_range = float(max_range)
-        ang = ring_angles(self.n_rays)
-        self._unit = np.column_stack([np.cos(ang), np.sin(ang)])
-        self.prior_speed = float(speed)
-        self.prior_turn_sd = float(turn_sd)
-        self.ahead = ahead
-        self._tracks: list[dict[str, Any]] = []
-        # what its tracks measured: displacements, heading changes, radii
-        self._speeds: list[float] = []
-        self._turns: list[float] = []
-        self._radii: list[float] = []
-        self._radius = np.zeros(0)
-        self.examples: list[tuple[float, float, float, float]] = []
-        """(room ahead before the step, turn, last speed, speed) of each body followed
-        over three well-measured readings (with ``ahead``; what :func:`learn_motion`
-        counts)."""
-
-    @property
-    def speed(self) -> float:
-        """The bodies' speed per step: estimated once 5 displacements were measured."""
-        if len(self._speeds) < MIN_SPEED_SAMPLES:
-            return self.prior_speed
-        return float(np.median(self._speeds))
-
-    @property
-    def turn_sd(self) -> float:
-        """The spread of a body's heading change per step, radians (robust estimate)."""
-        if len(self._turns) < MIN_TURN_SAMPLES:
-            return self.prior_turn_sd
-        return float(MAD * np.median(np.abs(self._turns)))
-
-    def detect(
-        self, ranges: NDArray[np.float64], static: NDArray[np.float64], position: Any
-    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
-        """The bodies in one reading: centres (k, 2), radii (k,) and the rays on each
-        (the radii of well-measured bodies are remembered for the short arcs to come)."""
-        s = np.asarray(ranges, dtype=np.float64)
-        st = np.asarray(static, dtype=np.float64)
-        if s.shape != (self.n_rays,) or st.shape != (self.n_rays,):
-            raise InvalidArgumentError(
-                f"ranges and static must have shape ({self.n_rays},); got {s.shape} and "
-                f"{st.shape}"
-            )
-        pos = np.asarray(position, dtype=np.float64)
-        return detect_discs(s, st, pos, self._unit, self.max_range, self._radii)
-
-    def update(
-        self, ranges: NDArray[np.float64], static: NDArray[np.float64], position: Any
-    ) -> NDArray[np.float64]:
-        """Follow one more reading; the bodies made out, as rows (x, y, vx, vy, radius)
-        (velocity zero: heading unknown), the rows :class:`copi.bounds.ModelOracle` reads
-        (:meth:`bodies` gives them as :func:`sample_motion` reads them)."""
-        C, R, rays = self.detect(ranges, static, position)
-        tracks = self._tracks
-        speed = self.speed
-        pairs = []
-        for ti, t in enumerate(tracks):
-            for di in range(len(C)):
-                # a body moves ``speed`` a step, whichever way it turned; of the
-                # candidates, the one nearest its prediction (if its heading is known)
-                ring = abs(math.dist(C[di], t["c"]) - speed)
-                if ring < 0.5:
-                    near = math.dist(C[di], t["c"] + t["v"]) if t["known"] else ring
-                    pairs.append((near, ti, di))
-        pairs.sort()
-        # a match is unambiguous when neither of its two had another candidate: only
-        # those teach the model (a swapped match reads as a turn that never was)
-        per_t = np.bincount([ti for _, ti, _ in pairs], minlength=len(tracks))
-        per_d = np.bincount([di for _, _, di in pairs], minlength=len(C))
-        used_t: set[int] = set()
-        new: list[dict[str, Any] | None] = [None] * len(C)  # a track per detection
-        for _, ti, di in pairs:
-            if ti in used_t or new[di] is not None:
-                continue
-            used_t.add(ti)
-            t = tracks[ti]
-            disp = C[di] - t["c"]
-            length = math.hypot(disp[0], disp[1])
-            # measured: both fits good, and it moved (a heading to speak of)
-            measured = rays[di] >= WELL and t["rays"] >= WELL and length > 0.05
-            heading = math.atan2(disp[1], disp[0])
-            if measured:
-                self._speeds.append(length)
-                if t["heading"] is not None:
-                    turn = (heading - t["heading"] + math.pi) % (2 * math.pi) - math.pi
-                    self._turns.append(turn)
-                    if self.ahead is not None and per_t[ti] == 1 and per_d[di] == 1:
-                        room = self.ahead(t["c"], t["heading"], float(R[di]))
-                        self.examples.append((room, turn, t["length"], length))
-            known = length > 0.2
-            new[di] = {
-                "c": C[di].copy(), "rays": int(rays[di]), "known": known,
-                "v": disp / length * speed if known else np.zeros(2),
-                "heading": heading if measured else None, "length": length,
-            }  # fmt: skip
-        for di in range(len(C)):
-            if new[di] is None:  # first seen: heading unknown
-                new[di] = {"c": C[di].copy(), "rays": int(rays[di]), "known": False,
-                           "v": np.zeros(2), "heading": None, "length": 0.0}  # fmt: skip
-        self._tracks = [t for t in new if t is not None]
-        self._radius = np.asarray(R, dtype=np.float64)
-        out = np.zeros((len(C), 5))
-        for i, t in enumerate(self._tracks):
-            out[i, :2], out[i, 2:4], out[i, 4] = t["c"], t["v"], R[i]
-        return out
-
-    def bodies(self) -> NDArray[np.float64]:
-        """The bodies of the last reading as :func:`sample_motion` reads them: rows (x, y,
-        heading, known, speed, radius), the speed the estimated one."""
-        out = np.zeros((len(self._tracks), 6))
-        for i, t in enumerate(self._tracks):
-            v = t["v"]
-            out[i] = (t["c"][0], t["c"][1], math.atan2(v[1], v[0]), float(t["known"]),
-                      self.speed, self._radius[i])  # fmt: skip
-        return out
 
 
 _TURN_EDGES = np.linspace(-math.pi, math.pi, N_TURN + 1)

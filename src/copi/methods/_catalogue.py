@@ -31,8 +31,12 @@ __all__: list[str] = []
 
 
 def _navground(behavior: str) -> Callable[..., Agent]:
-    def make(*, safety_margin: float = 0.3, horizon: float = 5.0) -> Agent:
-        return NavgroundAgent(behavior, safety_margin=safety_margin, horizon=horizon)
+    def make(
+        *, safety_margin: float = 0.3, horizon: float = 5.0, time_horizon: float | None = None,
+        neighbours: int | None = None,
+    ) -> Agent:  # fmt: skip
+        return NavgroundAgent(behavior, safety_margin=safety_margin, horizon=horizon,
+                              time_horizon=time_horizon, neighbours=neighbours)  # fmt: skip
 
     make.__name__ = f"navground_{behavior.lower()}"
     return make
@@ -160,6 +164,16 @@ def _register_builtins() -> None:
             missing="navground, which is not installed: pip install 'copi[peers]'",
             params={"safety_margin": margins[name]},
             summary=f"navground's {behavior} (sees obstacle positions and velocities)")
+    # CrowdNav's robot ORCA (its test.py: time horizon 5 s, 10 neighbours within 10 m, no
+    # safety space), in the units of its scenarios (a step of 0.25 m): the check that
+    # copi's circle crossing is CrowdNav's
+    reg("crowdnav-orca", _navground("ORCA"), sensing="oracle", requires="peers",
+        available=navground_available,
+        missing="navground, which is not installed: pip install 'copi[peers]'",
+        params={"safety_margin": 0.0, "horizon": 40.0, "time_horizon": 20.0, "neighbours": 10},
+        summary="navground's ORCA as CrowdNav's robot (its settings in CrowdNav's units: a time "
+        "horizon of 5 s, 10 neighbours within 10 m, no safety space); for the CrowdNav "
+        "families")
 
 
 _register_builtins()

@@ -26,7 +26,7 @@ from copi.results import (
     summarize_rows,
     verdict,
 )
-from copi.world import BENCHMARK_FAMILIES
+from copi.world import BENCHMARK_FAMILIES, family_spec
 
 __all__ = ["DEFAULT_AGAINST", "read_benchmark", "write_benchmark_report"]
 
@@ -196,6 +196,41 @@ def _figure_success_excess(table: dict[str, dict[MethodRun, dict[str, Any]]], ou
                          bbox_inches="tight")  # fmt: skip
 
 
+def physical_metrics(family: str, rows: dict[MethodRun, list[Any]],
+                     arms: list[MethodRun]) -> list[str]:  # fmt: skip
+    """For a family in physical units (CrowdNav's scenarios): its rows in CrowdNav's
+    metrics, as its papers report them (rates, not percentages; the navigation time in
+    seconds, over the successful episodes; the discomfort frequency, the share of all
+    steps closer to a human than the discomfort distance). Nothing for other families."""
+    try:
+        own = family_spec(family).episode
+    except CopiError:  # a family of another package, not installed here
+        return []
+    if own is None or own.seconds_per_step is None:
+        return []
+    metres = own.metres_per_step or 1.0
+    out = [f"CrowdNav's metrics (a step is {own.seconds_per_step:g} s and {metres:g} m; "
+           f"discomfort: closer than {(own.discomfort or 0) * metres:g} m):", "",
+           "| method | sensing | n | success rate | collision rate | timeout rate "
+           "| navigation time (s) | discomfort frequency |",
+           "|---|---|---|---|---|---|---|---|"]  # fmt: skip
+    for arm in arms:
+        rs = rows[arm]
+        n = len(rs)
+        won = [r.steps * own.seconds_per_step for r in rs if r.outcome == "success"]
+        steps = sum(r.steps for r in rs)
+        close = sum(r.close_steps or 0 for r in rs)
+        out.append(
+            f"| {arm.method} | {arm.sensing} | {n} "
+            f"| {sum(r.outcome == 'success' for r in rs) / n:.2f} "
+            f"| {sum(r.outcome == 'collision' for r in rs) / n:.2f} "
+            f"| {sum(r.outcome == 'timeout' for r in rs) / n:.2f} "
+            f"| {(sum(won) / len(won)) if won else float('nan'):.2f} "
+            f"| {close / steps if steps else float('nan'):.3f} |"
+        )
+    return [*out, ""]
+
+
 def read_benchmark(results: str | os.PathLike[str]) -> tuple[
     dict[str, dict[MethodRun, list[Any]]], dict[str, dict[str, Any]], dict[str, Any]
 ]:  # fmt: skip
@@ -336,6 +371,7 @@ def write_benchmark_report(
                 f"| {'reference' if pair is None else verdict(d_s, d_e)} |"
             )
         lines.append("")
+        lines += physical_metrics(family, g, arms)
     fig = _figure_success_excess(table, out)
     lines += [f"![success against median excess]({fig.name})", "", "## Methods", ""]
     lines += ["| method | needs | what it is | parameters |", "|---|---|---|---|"]

@@ -122,6 +122,9 @@ class EpisodeRow(Row):
     """Why an episode was skipped (None otherwise)."""
     strategy: str | None = "route"
     """"route" (levels with a map), else the sensor-level strategy."""
+    close_steps: int | None = None
+    """Steps closer to a moving obstacle than the family's discomfort distance (CrowdNav's
+    scenarios; no value for a family that has none)."""
     trajectory: dict[str, Any] | None = field(default=None, metadata=_NOT_A_COLUMN)
     """For recorded episodes: world, path, obstacle traces and radii (JSON-able); stored
     in table ``trajectories``, never read back with the row."""

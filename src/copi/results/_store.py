@@ -66,6 +66,7 @@ CREATE TABLE IF NOT EXISTS episodes (
     smoothness REAL,
     reason TEXT,
     strategy TEXT,
+    close_steps INTEGER,
     PRIMARY KEY (run_id, method, episode)
 );
 CREATE TABLE IF NOT EXISTS games (
@@ -127,6 +128,7 @@ LIFELONG_COLUMNS = columns(LifeRow, identity=False)
 _ADDED_EPISODE_COLUMNS = {
     "family": "TEXT", "sensing": "TEXT", "outcome": "TEXT", "time_to_goal": "REAL",
     "min_clearance": "REAL", "smoothness": "REAL", "reason": "TEXT", "strategy": "TEXT",
+    "close_steps": "INTEGER",
 }  # fmt: skip
 
 

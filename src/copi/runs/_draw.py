@@ -15,6 +15,7 @@ import os
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -26,7 +27,15 @@ from copi.online import ContextController, LearntAgent, Mapping
 from copi.planning import check_plannable, check_size, shortest_path
 from copi.results import EpisodeRow
 from copi.runs._episode import EpisodeOutcome, optimal_to_goal, run_episode
-from copi.world import RangeSensor, Simulator, World, check_task, load_worlds, sample_world
+from copi.world import (
+    RangeSensor,
+    Simulator,
+    World,
+    check_task,
+    family_spec,
+    load_worlds,
+    sample_world,
+)
 
 __all__ = [
     "Episode",
@@ -128,15 +137,23 @@ def draw_episode(
     record: bool = False,
 ) -> Simulator:
     """Episode k's world, task and obstacles, all from default_rng([seed, k]): the same
-    for every method, so that methods can be compared episode by episode."""
+    for every method, so that methods can be compared episode by episode. A family with
+    its own episode settings (:class:`copi.world.EpisodeSettings`: CrowdNav's scenarios)
+    sets the agent's radius, the goal's tolerance and the ring's range itself."""
     rng = np.random.default_rng([seed, k])
+    extra: dict[str, Any] = {}
     if world_file is not None:
         worlds = _world_list(world_file, world_file_sha)
         world = worlds[k % len(worlds)]
     else:
         world = sample_world(family, rng, name=f"{family}-{k:05d}")
+        own = family_spec(family).episode
+        if own is not None:
+            agent_radius, max_range = own.agent_radius, own.max_range
+            extra["goal_tolerance"] = own.goal_tolerance
     sensor = RangeSensor(n_rays, max_range)
-    sim = Simulator.from_world(world, rng, agent_radius=agent_radius, sensor=sensor, record=record)
+    sim = Simulator.from_world(world, rng, agent_radius=agent_radius, sensor=sensor, record=record,
+                               **extra)  # fmt: skip
     if world_file is not None:
         # A user's world may have no way through for the agent (a door narrower than it):
         # such an episode is no task at all, and is skipped saying so, never counted as a
@@ -236,6 +253,7 @@ def result_row(
         smoothness=out.smoothness,
         trajectory=trajectory,
         strategy=strategy,
+        close_steps=out.close_steps,
     )
 
 
@@ -303,6 +321,9 @@ class Episode:
         )  # fmt: skip
         optimal = optimal_to_goal(sim)
         label = world_file_label(world_file) if world_file is not None else family
+        own = family_spec(family).episode if world_file is None else None
+        if max_steps is None and own is not None and own.max_steps is not None:
+            max_steps = own.max_steps  # the family's own limit (CrowdNav's 24 s)
         limit = step_limit(optimal) if max_steps is None else int(max_steps)
         return cls(label, k, seed, sim, optimal, limit)
 
@@ -322,11 +343,13 @@ class Episode:
         """Run ``agent`` at ``sensing`` on a fresh copy (or on ``sim``, a copy the caller
         keeps) within the step limit; ``strategy``: the global strategy at level
         ``sensor`` (above it, the method follows the route)."""
+        own = None if self.family.startswith("file:") else family_spec(self.family).episode
         try:
             return run_episode(
                 agent, self.fresh() if sim is None else sim, sensing=sensing,
                 max_steps=self.max_steps, end_on_contact=end_on_contact,
                 strategy=strategy if sensing == "sensor" else "greedy",
+                discomfort=None if own is None else own.discomfort,
             )  # fmt: skip
         except MethodError as exc:
             raise MethodError(f"{exc} (episode {self.k} of {self.family}, seed {self.seed}, "

@@ -58,6 +58,9 @@ class EpisodeOutcome:
     """Steps on which the method commanded no motion."""
     counters: dict[str, Any]
     """Method-specific diagnostics (e.g. copi's unfamiliar rate)."""
+    close_steps: int | None = None
+    """Steps that ended closer to a moving obstacle than ``discomfort`` (surface to
+    surface), when :func:`run_episode` was given one."""
 
 
 def _shown(value: Any) -> str:
@@ -206,6 +209,11 @@ def make_task(
     obstacles' future)."""
     rank = check_sensing(sensing)
     knows_map = rank >= 1
+    if rank >= 3 and sim.crowd is not None and sim.crowd.spec.sees_agent:
+        raise InvalidArgumentError(
+            "level future needs moving obstacles that ignore the agent: this world's crowd "
+            "sees it, so its future depends on what the agent does"
+        )
     return Task(
         sensing=sensing,
         agent_radius=sim.agent_radius,
@@ -230,6 +238,7 @@ def run_episode(
     end_on_contact: bool = True,
     strategy: str = "greedy",
     origin: NDArray[np.float64] | None = None,
+    discomfort: float | None = None,
 ) -> EpisodeOutcome:
     """Run ``agent`` in ``sim`` (fresh, at t = 0) at ``sensing`` until it reaches the
     goal, touches a moving obstacle (when ``end_on_contact``) or runs out of steps.
@@ -239,6 +248,8 @@ def run_episode(
     ``strategy`` is the global strategy every method uses at level ``sensor``.
     ``origin``: in a lifelong run, where the agent's life began (its odometry is its
     position less ``origin``, and it may keep what it learnt from earlier tasks).
+    ``discomfort``: count the steps whose least surface distance to a moving obstacle is
+    below it (CrowdNav's discomfort frequency).
     When the episode ends, the agent is told its outcome (:meth:`Agent.finish`) and
     asked for its counters.
 
@@ -278,6 +289,7 @@ def run_episode(
     turning = 0.0
     last_move: np.ndarray | None = None
     min_gap = math.inf
+    close = 0
     steps = 0
     clock = time.perf_counter
     while steps < max_steps:
@@ -322,6 +334,8 @@ def run_episode(
             velocities = sim.centers - prev_centers
             prev_centers = sim.centers.copy()
         min_gap = min(min_gap, res.min_gap)
+        if discomfort is not None and res.min_gap < discomfort:
+            close += 1
         if res.contact:
             contacts += 1
             if end_on_contact:
@@ -359,6 +373,7 @@ def run_episode(
         decision_us=1e6 * t_decide / steps,
         no_policy=no_policy,
         counters=counters,
+        close_steps=close if discomfort is not None else None,
     )
 
 

@@ -15,6 +15,7 @@ from copi.world._families import (
     BENCHMARK_FAMILIES,
     CROWD_OBSTACLES,
     FAMILIES,
+    EpisodeSettings,
     FamilySpec,
     check_family,
     family_inputs,
@@ -26,6 +27,7 @@ from copi.world._families import (
     sample_world,
     unregister_family,
 )
+from copi.world._family_crowdnav import CROWDNAV, STEPS_PER_METRE, CrowdNavSettings
 from copi.world._family_indoor import IndoorParams, indoor_world
 from copi.world._family_maps import (
     MOVINGAI_ENV,
@@ -44,17 +46,23 @@ from copi.world._generate import (
     check_task,
     place_obstacles,
     random_world,
+    sample_free,
     sample_start_goal,
 )
 from copi.world._io import MAX_WORLDS, load_worlds, save_worlds
+from copi.world._reactive import ReactiveCrowd, navground_available
 from copi.world._render import draw_simulator, draw_world, rasterize, render_rgb
 from copi.world._sensor import RangeSensor
 from copi.world._simulator import Simulator, StepResult
-from copi.world._world import ObstacleSpec, World
+from copi.world._world import BEHAVIOURS, ObstacleSpec, World
 
 __all__ = [
+    "BEHAVIOURS",
     "BENCHMARK_FAMILIES",
+    "CROWDNAV",
     "CROWD_OBSTACLES",
+    "CrowdNavSettings",
+    "EpisodeSettings",
     "FAMILIES",
     "FamilySpec",
     "IndoorParams",
@@ -66,6 +74,8 @@ __all__ = [
     "PolygonParams",
     "RandomWalk",
     "RangeSensor",
+    "ReactiveCrowd",
+    "STEPS_PER_METRE",
     "Simulator",
     "StepResult",
     "World",
@@ -85,6 +95,7 @@ __all__ = [
     "map_window_world",
     "maps_identity",
     "movingai_dir",
+    "navground_available",
     "place_obstacles",
     "polygon_world",
     "random_walk_episodes",
@@ -92,6 +103,7 @@ __all__ = [
     "rasterize",
     "register_family",
     "render_rgb",
+    "sample_free",
     "sample_start_goal",
     "sample_world",
     "save_worlds",

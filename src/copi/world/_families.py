@@ -15,6 +15,12 @@ from copi._plugins import Registry, origin_of, replaced_origin
 from copi._rng import Seed, as_generator
 from copi._validation import as_vector
 from copi.errors import CopiError, InvalidArgumentError
+from copi.world._family_crowdnav import (
+    CROWDNAV,
+    STEPS_PER_METRE,
+    circle_crossing,
+    square_crossing,
+)
 from copi.world._family_indoor import indoor_world
 from copi.world._family_maps import MapsParams, map_window_world, maps_identity
 from copi.world._family_polygon import polygon_world
@@ -24,6 +30,7 @@ from copi.world._world import ObstacleSpec, World
 __all__ = [
     "CROWD_OBSTACLES",
     "ENTRY_POINTS",
+    "EpisodeSettings",
     "FAMILIES",
     "FamilySpec",
     "check_family",
@@ -37,7 +44,7 @@ __all__ = [
     "unregister_family",
 ]
 
-FAMILIES = ("crowd", "indoor", "maps", "polygon", "star")
+FAMILIES = ("circle-crossing", "crowd", "indoor", "maps", "polygon", "square-crossing", "star")
 """Names of copi's own world families, sorted (see :func:`sample_world`); other packages
 add theirs with :func:`register_family` (all of them: :func:`family_names`)."""
 
@@ -50,6 +57,27 @@ taking no argument that registers families (:func:`register_family`) when called
 
 Sampler = Callable[..., World]
 """sampler(rng, *, name=None) -> World: a family's world drawn from the generator."""
+
+
+@dataclass(frozen=True)
+class EpisodeSettings:
+    """A family's own episode settings, where its worlds are not at copi's usual scale
+    (CrowdNav's scenarios: a step is 0.25 s, the agent's radius 1.2 steps)."""
+
+    agent_radius: float = 0.3
+    goal_tolerance: float = 0.5
+    max_range: float = 10.0
+    """The ring's range, agent steps."""
+    max_steps: int | None = None
+    """A fixed step limit (None: three times the optimum and 100, as everywhere)."""
+    seconds_per_step: float | None = None
+    """Physical time of one step, where the family has physical units."""
+    metres_per_step: float | None = None
+    discomfort: float | None = None
+    """Steps closer to a moving obstacle than this (surface to surface, agent steps)
+    count as uncomfortable (CrowdNav's discomfort frequency)."""
+    episodes: int | None = None
+    """Episodes the benchmark runs of the family unless told (CrowdNav's test set: 500)."""
 
 
 @dataclass(frozen=True)
@@ -67,6 +95,8 @@ class FamilySpec:
     """Where the sampler comes from, for another package's family: its package and
     version and a hash of its module's code (:func:`copi._plugins.origin_of`); empty for
     copi's own."""
+    episode: EpisodeSettings | None = None
+    """Its own episode settings, where they are not copi's usual ones."""
 
 
 _FAMILIES: Registry[FamilySpec] = Registry("family", ENTRY_POINTS, "families")
@@ -78,12 +108,15 @@ def register_family(
     *,
     summary: str = "",
     inputs: Callable[[], dict[str, str]] | None = None,
+    episode: EpisodeSettings | None = None,
     replace: bool = False,
 ) -> FamilySpec:
     """Register world family ``name``: ``sampler(rng, *, name=None)`` draws a
     :class:`World` from a numpy Generator (every random choice from it), which
     :func:`sample_world` then returns. Episodes of the family draw their task, start and
-    obstacles after the world, from the same generator.
+    obstacles after the world, from the same generator; ``episode``: the family's own
+    agent radius, goal tolerance, ring range, step limit and physical units, where they
+    are not copi's usual ones.
 
     Examples
     --------
@@ -99,7 +132,7 @@ def register_family(
         raise InvalidArgumentError(f"the sampler of {name} must be callable; got {sampler!r}")
     old = _FAMILIES.current(name)
     same = old is not None and old.sampler is sampler
-    spec = FamilySpec(name, sampler, summary, inputs, origin_of(sampler, "family"))
+    spec = FamilySpec(name, sampler, summary, inputs, origin_of(sampler, "family"), episode)
     return _FAMILIES.add(name, spec, same=same, replace=replace)
 
 
@@ -249,6 +282,17 @@ def _maps(rng: np.random.Generator, *, name: str | None = None) -> World:
     return map_window_world(rng, name=name)
 
 
+_CROWDNAV = EpisodeSettings(
+    agent_radius=CROWDNAV.radius * STEPS_PER_METRE,
+    goal_tolerance=CROWDNAV.radius * STEPS_PER_METRE,
+    max_range=CROWDNAV.neighbor_dist * STEPS_PER_METRE,
+    max_steps=round((CROWDNAV.time_limit - 1.0) / CROWDNAV.time_step),
+    seconds_per_step=CROWDNAV.time_step, metres_per_step=1.0 / STEPS_PER_METRE,
+    discomfort=CROWDNAV.discomfort_dist * STEPS_PER_METRE, episodes=500,
+)  # fmt: skip
+"""CrowdNav's robot in copi's units: radius 0.3 m, success within it of the goal, 10 m
+seen, 96 decisions (CrowdNav's timeout comes at 24 s), a step of 0.25 s."""
+
 for _name, _sampler, _summary, _inputs in (
     ("crowd", _crowd, "the polygon worlds with 25-40 obstacles moving at 0.8", None),
     ("indoor", indoor_world, "rooms, doors and corridors on a random floor plan", None),
@@ -258,6 +302,12 @@ for _name, _sampler, _summary, _inputs in (
     ("star", _star, "the paper's random star-shaped polygons of 4 to 12 sides", None),
 ):  # fmt: skip
     register_family(_name, _sampler, summary=_summary, inputs=_inputs)
+register_family("circle-crossing", circle_crossing, episode=_CROWDNAV,
+                summary="CrowdNav's circle crossing: 5 ORCA humans crossing a circle of 4 m, "
+                "the robot invisible to them (needs the extra peers)")  # fmt: skip
+register_family("square-crossing", square_crossing, episode=_CROWDNAV,
+                summary="CrowdNav's square crossing: 5 ORCA humans crossing a 10 m square, the "
+                "robot invisible to them (needs the extra peers)")  # fmt: skip
 _FAMILIES.seal()
 
 

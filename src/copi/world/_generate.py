@@ -15,7 +15,14 @@ from copi.geometry import turned
 from copi.geometry.kernels import clearance as _clearance_kernel
 from copi.world._world import ObstacleSpec, World
 
-__all__ = ["WorldParams", "check_task", "place_obstacles", "random_world", "sample_start_goal"]
+__all__ = [
+    "WorldParams",
+    "check_task",
+    "place_obstacles",
+    "random_world",
+    "sample_free",
+    "sample_start_goal",
+]
 
 
 @dataclass(frozen=True)
@@ -145,6 +152,17 @@ def _sample_in(
         if total >= n:
             break
     return np.concatenate(found)[:n] if found else np.zeros((0, 2))
+
+
+def sample_free(world: World, seed: Seed, clearance: float) -> FloatArray:
+    """One point uniform in the free space, at least ``clearance`` from every wall (a
+    crowd disc's next goal); one clear error when there is none."""
+    rng = as_generator(seed)
+    got = _sample_in(world.polygon, world.segments, clearance, rng, 1)
+    if not len(got):
+        raise InvalidWorldError(f"world {world.name!r}: no room for a goal {clearance:g} from "
+                                "every wall")  # fmt: skip
+    return np.asarray(got[0], dtype=np.float64)
 
 
 def sample_start_goal(

@@ -11,8 +11,9 @@ import numpy as np
 from copi._rng import Seed, as_generator
 from copi._validation import FloatArray, as_vector, positive
 from copi.errors import InvalidArgumentError
-from copi.geometry.kernels import step_world
-from copi.world._generate import place_obstacles, sample_start_goal
+from copi.geometry.kernels import step_agent, step_world
+from copi.world._generate import place_obstacles, sample_free, sample_start_goal
+from copi.world._reactive import ReactiveCrowd
 from copi.world._sensor import RangeSensor
 from copi.world._world import ObstacleSpec, World
 
@@ -68,6 +69,9 @@ class Simulator:
         The goal is reached when the centre ends a step within this distance of it.
     record : bool
         Keep the agent's path and the obstacles' traces (for pictures).
+    crowd : ObstacleSpec, optional
+        A crowd behaviour the obstacles follow instead of the random walk
+        (:class:`~copi.world.ReactiveCrowd`), toward ``crowd_goals`` (one per obstacle).
     """
 
     def __init__(
@@ -85,6 +89,8 @@ class Simulator:
         turn_sd: float = 0.6,
         goal_tolerance: float = 0.5,
         record: bool = False,
+        crowd: ObstacleSpec | None = None,
+        crowd_goals: Any = None,
     ) -> None:
         self.world = world
         self.sensor = sensor or RangeSensor()
@@ -103,6 +109,14 @@ class Simulator:
                 f"got {self.radii.shape[0]}"
             )
         self.headings = self.rng.uniform(0, 2 * np.pi, size=self.radii.shape[0])
+        self.crowd: ReactiveCrowd | None = None
+        if crowd is not None and crowd.reactive:
+            goals = np.asarray(crowd_goals, dtype=np.float64).reshape(-1, 2)
+            if goals.shape != self.centers.shape:
+                raise InvalidArgumentError(f"crowd_goals must be one per obstacle "
+                                           f"({len(self.centers)}); got {goals.shape}")  # fmt: skip
+            self.crowd = ReactiveCrowd(world, crowd, self.centers, self.radii, goals,
+                                       self.agent_radius)  # fmt: skip
         self.t = 0
         self.ranges = self.sensor.scan(world, self.position, self.centers, self.radii)
         self.record = record
@@ -130,13 +144,21 @@ class Simulator:
         rng = as_generator(seed)
         start, goal = sample_start_goal(world, rng, radius=agent_radius, min_distance=min_distance)
         spec = obstacles or world.obstacles or ObstacleSpec()
-        centers, radii = place_obstacles(
-            world,
-            rng,
-            spec=spec,
-            keep_clear=np.vstack([start, goal]),
-            keep_clear_radius=agent_radius + 1.0,
-        )
+        if spec.positions is not None:  # the world places them itself
+            centers = np.array(spec.positions, dtype=np.float64)
+            radii = rng.uniform(spec.radius[0], spec.radius[1], size=len(centers))
+        else:
+            centers, radii = place_obstacles(
+                world,
+                rng,
+                spec=spec,
+                keep_clear=np.vstack([start, goal]),
+                keep_clear_radius=agent_radius + 1.0,
+            )
+        goals = None
+        if spec.reactive:
+            drawn = [sample_free(world, rng, r) for r in radii] if spec.goals is None else None
+            goals = np.array(spec.goals if drawn is None else drawn, dtype=np.float64)
         return cls(
             world,
             start,
@@ -147,6 +169,8 @@ class Simulator:
             agent_radius=agent_radius,
             sensor=sensor,
             speed=spec.speed,
+            crowd=spec if spec.reactive else None,
+            crowd_goals=goals,
             **kwargs,
         )
 
@@ -175,6 +199,14 @@ class Simulator:
             raise InvalidArgumentError(f"action must be finite; got {a.tolist()}")
         if norm > 1.0:
             a /= norm
+        if self.crowd is not None:
+            old = self.centers.copy()
+            self.centers = self.crowd.step(self.position, a, self.rng)
+            blocked, contact, gap = step_agent(
+                self.position, a, self.agent_radius, self.world.segments, old, self.centers,
+                self.radii, self.sensor.cos, self.sensor.sin, self.sensor.max_range, self.ranges,
+            )  # fmt: skip
+            return self._after(blocked, contact, gap)
         d = self.radii.shape[0]
         turn = self.rng.normal(0.0, self.turn_sd, d)
         retry = self.rng.random((d, _RETRIES))
@@ -194,6 +226,9 @@ class Simulator:
             self.sensor.max_range,
             self.ranges,
         )
+        return self._after(blocked, contact, gap)
+
+    def _after(self, blocked: bool, contact: bool, gap: float) -> StepResult:
         self.t += 1
         if self.record:
             self.path.append(self.position.copy())

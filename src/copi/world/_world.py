@@ -16,7 +16,7 @@ from copi._validation import FloatArray, as_vector
 from copi.errors import CopiError, InvalidWorldError
 from copi.geometry import as_ring, clearance, orient, ring_crossings, ring_segments
 
-__all__ = ["ObstacleSpec", "World"]
+__all__ = ["BEHAVIOURS", "ObstacleSpec", "World"]
 
 
 @contextmanager
@@ -36,6 +36,9 @@ most a few hundred; a Moving AI map of 512 x 512 cells, a few thousand)."""
 MAX_COORDINATE = 1e6
 """Largest absolute coordinate of a world, in agent steps (the agent moves 1 a step; a
 world of 1e300 is a typing error, and its arithmetic overflows)."""
+BEHAVIOURS = ("random-walk", "orca", "hl", "hrvo", "social-force")
+"""How moving obstacles may move (:attr:`ObstacleSpec.behaviour`)."""
+
 MAX_OBSTACLES = 10_000
 """More moving obstacles than this in one world are refused (a typo, not a crowd)."""
 
@@ -67,10 +70,14 @@ def _pair(value: Any, name: str, *, integer: bool = False) -> tuple[float, float
 
 @dataclass(frozen=True)
 class ObstacleSpec:
-    """How many moving obstacles a world has, how large and how fast (paper §IV).
+    """How many moving obstacles a world has, how large and how fast (paper §IV), and how
+    they move.
 
     Defaults are the paper's: 10 to 15 discs random-walking at 0.6 of the agent's speed;
     radii from 0.5 to 1.0 agent steps (the paper does not give sizes; docs/design.md does).
+    A crowd ``behaviour`` makes them walk toward goals of their own instead, each step
+    chosen by one of navground's behaviours (ORCA, HL, HRVO, social force: the extra
+    ``peers``), avoiding each other, the walls and, when ``sees_agent``, the agent.
     """
 
     count: tuple[int, int] = (10, 15)
@@ -78,9 +85,29 @@ class ObstacleSpec:
     radius: tuple[float, float] = (0.5, 1.0)
     """Disc radius in agent steps, drawn uniformly from (low, high) for each obstacle."""
     speed: float = 0.6
-    """Distance moved per time step, in agent steps (the agent moves at most 1)."""
+    """Distance moved per time step, in agent steps (the agent moves at most 1); a crowd
+    behaviour's preferred speed."""
+    behaviour: str = "random-walk"
+    """How they move: "random-walk" (the paper's: each ignores everything), or toward goals
+    of their own with navground's "orca", "hl", "hrvo" or "social-force"."""
+    sees_agent: bool = False
+    """A crowd sees the agent and gives way to it; otherwise the agent is invisible to it
+    (CrowdNav's setting)."""
+    time_horizon: float = 10.0
+    """Steps ahead a crowd behaviour looks (ORCA's and HRVO's time horizon)."""
+    safety_margin: float = 0.0
+    """Room a crowd behaviour keeps beyond the sum of radii, agent steps."""
+    neighbours: int = 10
+    """Most neighbours a crowd behaviour considers, the nearest first."""
+    new_goals: bool = True
+    """A disc at its goal is given another (drawn in the free space); otherwise it stays."""
+    positions: tuple[tuple[float, float], ...] | None = None
+    """Where the discs start (then ``count`` is their number): drawn when None."""
+    goals: tuple[tuple[float, float], ...] | None = None
+    """A crowd's first goals, one per disc: drawn when None."""
 
     def __post_init__(self) -> None:
+        self._crowd_checks()
         lo, hi = _pair(self.count, "obstacles.count", integer=True)
         if hi > MAX_OBSTACLES:
             raise InvalidWorldError(
@@ -95,24 +122,71 @@ class ObstacleSpec:
         if speed[0] != speed[1]:
             raise InvalidWorldError(f"obstacles.speed must be one number; got {self.speed!r}")
         object.__setattr__(self, "speed", speed[0])
+        if self.positions is not None:  # the discs given: their number is the count
+            object.__setattr__(self, "count", (len(self.positions), len(self.positions)))
+
+    def _crowd_checks(self) -> None:
+        if self.behaviour not in BEHAVIOURS:
+            raise InvalidWorldError(f"obstacles.behaviour must be one of "
+                                    f"{', '.join(BEHAVIOURS)}; got {self.behaviour!r}")  # fmt: skip
+        for key in ("sees_agent", "new_goals"):
+            if not isinstance(getattr(self, key), bool):
+                raise InvalidWorldError(f"obstacles.{key} must be true or false; got "
+                                        f"{getattr(self, key)!r}")  # fmt: skip
+        for key, most in (("time_horizon", 1000.0), ("safety_margin", 100.0)):
+            v = getattr(self, key)
+            ok = isinstance(v, int | float) and not isinstance(v, bool) and np.isfinite(v)
+            if not ok or not (0 < v <= most if key == "time_horizon" else 0 <= v <= most):
+                raise InvalidWorldError(f"obstacles.{key} must be a number in "
+                                        f"{'(0' if key == 'time_horizon' else '[0'}, {most:g}]; "
+                                        f"got {v!r}")  # fmt: skip
+            object.__setattr__(self, key, float(v))
+        n = self.neighbours
+        if isinstance(n, bool) or not isinstance(n, int | np.integer) or not 1 <= n <= 1000:
+            raise InvalidWorldError(f"obstacles.neighbours must be an int in 1 .. 1000; got {n!r}")
+        for key in ("positions", "goals"):
+            v = getattr(self, key)
+            if v is None:
+                continue
+            try:
+                arr = np.asarray(v, dtype=np.float64)
+            except (TypeError, ValueError):
+                arr = np.zeros((0, 3))
+            if arr.ndim != 2 or arr.shape[1] != 2 or not len(arr) or not np.isfinite(arr).all():
+                raise InvalidWorldError(f"obstacles.{key} must be a list of [x, y] points; got "
+                                        f"{v!r}"[:200])  # fmt: skip
+            if (np.abs(arr) > MAX_COORDINATE).any():
+                raise InvalidWorldError(f"obstacles.{key} lie beyond {MAX_COORDINATE:g}")
+            object.__setattr__(self, key, tuple((float(x), float(y)) for x, y in arr))
+        if self.goals is not None and self.behaviour == "random-walk":
+            raise InvalidWorldError("obstacles.goals belong to a crowd behaviour; a random walk "
+                                    "has none")  # fmt: skip
+        if self.positions is not None and self.goals is not None and len(self.goals) != len(
+                self.positions):  # fmt: skip
+            raise InvalidWorldError(f"obstacles.goals must be one per position "
+                                    f"({len(self.positions)}); got {len(self.goals)}")  # fmt: skip
+
+    @property
+    def reactive(self) -> bool:
+        """The discs follow a crowd behaviour (not the paper's random walk)."""
+        return self.behaviour != "random-walk"
 
     @classmethod
     def from_dict(cls, data: Any) -> ObstacleSpec:
         """From the JSON form ``{"count": 12, "radius": 0.75, "speed": 0.6}`` (all optional;
-        count and radius may be [low, high] pairs)."""
+        count and radius may be [low, high] pairs), with, for a crowd, ``"behaviour":
+        "orca"`` and its settings (``sees_agent``, ``time_horizon``, ``safety_margin``,
+        ``neighbours``, ``new_goals``, ``positions``, ``goals``)."""
         if not isinstance(data, dict):
             raise InvalidWorldError(f"obstacles must be an object; got {type(data).__name__}")
-        unknown = sorted(set(data) - {"count", "radius", "speed"})
+        keys = [f.name for f in dataclasses.fields(cls)]
+        unknown = sorted(set(data) - set(keys))
         if unknown:
             raise InvalidWorldError(
-                f"obstacles has unknown keys {unknown}; expected count, radius, speed"
+                f"obstacles has unknown keys {unknown}; expected {', '.join(keys)}"
             )
         default = cls()
-        return cls(
-            count=data.get("count", default.count),
-            radius=data.get("radius", default.radius),
-            speed=data.get("speed", default.speed),
-        )
+        return cls(**{k: data.get(k, getattr(default, k)) for k in keys})
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form; a (low, high) pair with low == high is written as one number."""
@@ -120,7 +194,14 @@ class ObstacleSpec:
         def short(p: tuple[float, float] | tuple[int, int]) -> Any:
             return p[0] if p[0] == p[1] else list(p)
 
-        return {"count": short(self.count), "radius": short(self.radius), "speed": self.speed}
+        out: dict[str, Any] = {"count": short(self.count), "radius": short(self.radius),
+                               "speed": self.speed}  # fmt: skip
+        default = type(self)()
+        for f in dataclasses.fields(self):  # a crowd's settings, where they are not default
+            v = getattr(self, f.name)
+            if f.name not in out and v != getattr(default, f.name):
+                out[f.name] = [list(p) for p in v] if f.name in ("positions", "goals") else v
+        return out
 
 
 @dataclass(frozen=True, eq=False)

@@ -9,7 +9,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.install-stamp
 RESULTS ?= results
 
-.PHONY: install run test lint typecheck pytest docs bench clean
+.PHONY: install run test lint typecheck pytest docs bench clean shell
 
 install: $(STAMP)
 
@@ -60,6 +60,11 @@ docs: install
 bench: install
 	-$(BIN)/python -m pip install --quiet extremitypathfinder || echo "extremitypathfinder unavailable: no ratio"
 	$(BIN)/pytest -m slow; slow=$$?; $(BIN)/python benchmarks/run.py && exit $$slow
+
+# A shell with copi (and the project's python and pip) on the PATH; exit to leave it.
+shell: install
+	@echo "copi is on the PATH of this shell ($(CURDIR)/$(BIN)); exit to leave it"
+	@VIRTUAL_ENV="$(CURDIR)/$(VENV)" PATH="$(CURDIR)/$(BIN):$$PATH" $${SHELL:-/bin/sh}
 
 clean:
 	rm -rf $(VENV) build *.egg-info src/*.egg-info .pytest_cache .mypy_cache .ruff_cache

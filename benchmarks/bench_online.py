@@ -2,8 +2,10 @@
 
 Goals (issue: online policy instantiation and Experiment 1):
 - one decision (scan excluded) <= 10 µs for one agent, <= 3 µs per agent batched;
-- the learnt preset's decision (issue: capabilities that earn their keep) <= 10 µs for
-  one agent, <= 3 µs per agent batched;
+- the learnt preset's decision as a user calls it (``make_agent("copi-learnt",
+  caps).act(obs)``: its global direction, recognition and choice; the scan aside) <= 10
+  µs for one agent at each level, its batched path with its defaults <= 3 µs per agent;
+- copi-predictive's decision (planning over its learnt futures) <= 1 ms;
 - 2 workers >= 1.8x one worker on the same episodes (the full `copi reproduce` at
   paper scale, <= 120 s on 2 cores, is timed by `make run`).
 """
@@ -13,16 +15,58 @@ from __future__ import annotations
 import tempfile
 import time
 import timeit
-from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from benchmarks._timing import Timing, median_time, note, report
+from copi.core import Agent, Observation, Task
 from copi.experiments import NavigationConfig, evaluate
 from copi.learning import LearnParams, explore, learn
 from copi.methods import make_agent
-from copi.online import ContextController, LearntAgent
+from copi.online import ContextController
+from copi.runs import draw_episode, run_episode
+
+
+def _observations(level: str, family: str = "indoor") -> tuple[Any, list[Observation]]:
+    """The task and every observation of an episode as the runner hands them to a method
+    at ``level`` (compass-guard walking it), to replay to the method timed."""
+    seen: list[Observation] = []
+
+    class Recording(Agent):
+        steers_itself = True
+
+        def reset(self, task: Task) -> None:
+            self.inner = make_agent("compass-guard")
+            self.inner.reset(task)
+            self.task = task
+
+        def act(self, obs: Observation) -> np.ndarray:
+            seen.append(obs)
+            return self.inner.act(obs)
+
+    rec = Recording()
+    for k in range(20):
+        seen.clear()
+        run_episode(rec, draw_episode(family, k, 7), sensing=level, max_steps=200)  # type: ignore[arg-type]
+        if len(seen) >= 40:
+            break
+    return rec.task, list(seen)
+
+
+def _act_time(agent: Agent, task: Any, observations: list[Observation], *,
+              repeat: int = 7) -> float:  # fmt: skip
+    """Median over ``repeat`` replays of one method's ``act`` per observation, as a user
+    calls it (its global direction, the recognition and the choice; the scan aside)."""
+    times = []
+    for _ in range(repeat + 1):  # the first replay compiles and warms
+        agent.reset(task)
+        t0 = time.perf_counter()
+        for obs in observations:
+            agent.act(obs)
+        times.append((time.perf_counter() - t0) / len(observations))
+    return float(np.median(times[1:]))
 
 
 def main() -> bool:
@@ -62,53 +106,23 @@ def main() -> bool:
             per=1000,
         ),
     ]
-    from copi.online import _learnt_kernels
-
-    static = np.full(caps.n_rays, np.inf)
-    p, out, feat = np.empty(17), np.empty(5), np.empty(8 * caps.n_rays)
-    j = iter(range(1, 10**9))
-
-    def one_decision(a: LearntAgent) -> Callable[[], None]:
-        """One of ``a``'s decisions (the kernel alone) on the next stored reading."""
-        args = (a._nodes_t, a._prior, a._net)
-
-        def decide() -> None:
-            k = next(j) % 2000
-            _learnt_kernels.decide_learnt(
-                readings[k], readings[k - 1], static, *args, want[k, 0], want[k, 1], 5.0,
-                a.guard, a.alpha, a.beta, a.wait, a._cos, a._sin, 10.0, a._compass, feat, p, out,
-                a._landmarks, -1, -1, 0.0, True, a.model.static_aware,
-            )  # fmt: skip
-
-        decide()
-        return decide
-
     learnt = learn(LearnParams(directions=16, safety=True))
-    agent = make_agent("copi-learnt", learnt)  # the registered preset
-    learnt_decision = one_decision(agent)
-    rows.append(
-        Timing(
-            "learnt preset: decide, one agent",
-            sorted(timeit.repeat(learnt_decision, number=20000, repeat=5))[2] / 20000,
-        )
-    )
+    agent = make_agent("copi-learnt", learnt)  # the registered preset, its defaults
+    recorded = {level: _observations(level) for level in ("sensor", "map")}
+    for level, (task, observations) in recorded.items():
+        rows.append(Timing(f"copi-learnt: make_agent(...).act, level {level}",
+                           _act_time(agent, task, observations)))  # fmt: skip
     # contexts that see motion (copi-learnt-motion, an ablation: no goal of its own)
-    moving = learn(LearnParams(directions=16, safety=True, motion=True))
-    motion_decision = one_decision(
-        make_agent("copi-learnt-motion", moving)
-    )
-    rows.append(
-        Timing(
-            "learnt, contexts that see motion: decide, one agent",
-            sorted(timeit.repeat(motion_decision, number=20000, repeat=5))[2] / 20000,
-        )
-    )
+    moving = make_agent("copi-learnt-motion", learn(LearnParams(directions=16, safety=True,
+                                                                motion=True)))  # fmt: skip
+    task, observations = recorded["map"]
+    rows.append(Timing("copi-learnt-motion: act, level map", _act_time(moving, task, observations)))
     prev_batch = readings[999:1999]
-    static_batch = np.full(batch.shape, np.inf)
+    static_batch = np.asarray([o.static for o in observations[:1]] * 1000)
     agent.decide_batch(batch, prev_batch, want[:1000], 5.0, static_batch)
     rows.append(
         Timing(
-            "learnt preset: decide_batch, 1000 agents",
+            "copi-learnt: decide_batch, 1000 agents (defaults)",
             median_time(
                 lambda: agent.decide_batch(batch, prev_batch, want[:1000], 5.0, static_batch),
                 number=20,
@@ -117,10 +131,10 @@ def main() -> bool:
         )
     )
     # the registered preset's choice uses no context (beta 0): the same actions without
-    # recognising any
+    # recognising any, when asked
     rows.append(
         Timing(
-            "learnt preset: decide_batch, 1000 agents, recognise=False",
+            "copi-learnt: decide_batch, 1000 agents, recognise=False",
             median_time(
                 lambda: agent.decide_batch(batch, prev_batch, want[:1000], 5.0, static_batch,
                                            recognise=False),  # fmt: skip
@@ -129,12 +143,18 @@ def main() -> bool:
             per=1000,
         )
     )
+    predictive = make_agent("copi-predictive", learn(LearnParams(
+        directions=16, safety=True, safety_static=True, predict=True)))  # fmt: skip
+    crowd_task, crowd_obs = _observations("map", family="crowd")
+    rows.append(Timing("copi-predictive: act, level map (crowd)",
+                       _act_time(predictive, crowd_task, crowd_obs, repeat=3)))  # fmt: skip
     ok = report(
         "online decision (scan excluded)",
         rows,
         None,
         {rows[0].name: 10e-6, rows[1].name: 10e-6, rows[2].name: 3e-6, rows[3].name: 10e-6,
-         rows[5].name: 3e-6, rows[6].name: 3e-6},
+         rows[4].name: 10e-6, rows[6].name: 3e-6, rows[7].name: 3e-6,
+         rows[8].name: 1e-3},
     )
     cfg = NavigationConfig(str(caps_path), worlds=400, method="copi-extended", guard=1.2)
     walls = {}

@@ -31,8 +31,9 @@ def test_future_is_a_level_above_oracle_and_only_it_tells_the_future() -> None:
     assert task.future is not None and task.future.shape == (41, len(sim.radii), 3)
     np.testing.assert_array_equal(task.future[0, :, :2], sim.centers)
     np.testing.assert_array_equal(task.future[:, :, 2], np.broadcast_to(sim.radii, (41, len(sim.radii))))
-    assert method_spec("clairvoyant").bound and method_spec("model-oracle").bound
-    assert not method_spec("dwa").bound
+    assert method_spec("clairvoyant").bound  # solves every episode of every family
+    # a reference planner, not a bound: methods that know less match it in most families
+    assert not method_spec("model-oracle").bound and not method_spec("dwa").bound
     with pytest.raises(InvalidArgumentError, match="clairvoyant needs sensing level 'future'"):
         run_episode(Clairvoyant(), copy.deepcopy(sim), sensing="oracle", max_steps=10)
 

@@ -25,8 +25,9 @@ _RETRIES = 4  # the simulator's headings tried by a disc a wall stops
 
 
 class ModelOracle(Agent):
-    """A bound, not a method: model-predictive control against the obstacles' motion
-    model (level ``oracle``, plus :data:`TURN_SD`).
+    """A reference planner (not a bound: methods that know less match it in most
+    families): model-predictive control against the obstacles' motion model (level
+    ``oracle``, plus :data:`TURN_SD`).
 
     Each step it draws ``samples`` futures of every disc's random walk over ``horizon``
     steps, with the simulator's own rule and parameters (the heading and speed each disc

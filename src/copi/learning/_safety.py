@@ -114,6 +114,8 @@ def fork_simulator(sim: Simulator) -> Simulator:
     c.ranges = sim.ranges.copy()
     c._action = np.zeros(2)
     c.record = False
+    if sim.crowd is not None:  # a crowd that reacts: its own copy, stepped alike
+        c.crowd = copy.deepcopy(sim.crowd)
     bg = type(sim.rng.bit_generator)()
     bg.state = sim.rng.bit_generator.state
     c.rng = np.random.Generator(bg)
@@ -137,7 +139,7 @@ def second_move_clear(qx, qy, r, segs, c1, c2, radii, moves, clear):  # type: ig
     """Whether an agent of radius ``r`` at (qx, qy) has a move among ``moves`` (velocities,
     one step) that no wall (``segs``) stops short and that passes every obstacle moving
     linearly from ``c1`` to ``c2`` (radii ``radii``) with ``clear`` to spare: the
-    model-oracle's own test (:func:`copi.bounds._kernels.escapes`) on one future, with
+    model-oracle's own test (:func:`copi.geometry.kernels.escapes`) on one future, with
     :data:`WALL_ROOM` to spare from walls where the oracle keeps 1e-6."""
     free = np.empty(moves.shape[0], dtype=np.bool_)
     local = local_segments(qx, qy, segs, 1.0 + r + 1e-3)  # a move is at most 1 long

@@ -313,11 +313,11 @@ def write_benchmark_report(
         f"than {reference}. n: the row's episodes. Steps to goal, clearance (the least "
         "surface distance to a moving obstacle over an episode, negative after a contact) "
         "and turning per step are medians; steps and turning over successful episodes. "
-        "Rows marked *(bound)* are ceilings, not methods: `clairvoyant` (the share of "
-        "episodes solvable at all, its plan replayed through the simulator; its path length "
-        "is no yardstick, as the optimum is known only in retrospect) and `model-oracle` (the "
-        "best to expect of an agent that knows the present and the obstacles' motion model, "
-        "not their future).",
+        "A row marked *(bound)* is a ceiling, not a method: `clairvoyant`, the share of "
+        "episodes solvable at all (its plan replayed through the simulator; its path length "
+        "is no yardstick, as the optimum is known only in retrospect). `model-oracle` is a "
+        "reference planner, not a bound: it knows the present and the obstacles' motion "
+        "model, not their future, and methods that know less match it in most families.",
         "",
     ]
     diffs: dict[str, dict[MethodRun, tuple[PairedDifference, PairedDifference] | None]] = {}

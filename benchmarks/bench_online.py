@@ -148,6 +148,18 @@ def main() -> bool:
     crowd_task, crowd_obs = _observations("map", family="crowd")
     rows.append(Timing("copi-predictive: act, level map (crowd)",
                        _act_time(predictive, crowd_task, crowd_obs, repeat=3)))  # fmt: skip
+    # many agents at once: each plans in its own thread (the kernels release the GIL)
+    many = [make_agent("copi-predictive", predictive.capabilities) for _ in range(8)]
+    for workers in (1, 2):
+        def batch_of_8(workers: int = workers) -> None:
+            for a in many:
+                a.reset(crowd_task)
+            for obs in crowd_obs[:10]:
+                type(predictive).act_many(many, [obs] * len(many), workers=workers)
+
+        batch_of_8()
+        rows.append(Timing(f"copi-predictive: act_many, 8 agents, {workers} worker(s)",
+                           median_time(batch_of_8, number=1, repeat=3), per=80))  # fmt: skip
     ok = report(
         "online decision (scan excluded)",
         rows,

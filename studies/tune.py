@@ -53,6 +53,11 @@ GRID: dict[str, list[dict[str, float]]] = {
     # the weight of the template safety priors in the learnt preset's ablations
     "copi-learnt-priors": [{"beta": v} for v in (0.25, 0.5, 1.0, 2.0)],
     "copi-learnt-motion": [{"beta": v} for v in (0.25, 0.5, 1.0, 2.0)],
+    # copi-predictive: the weight of the learnt safety network, and the planner's margins
+    # and horizon (tuned for the model-oracle, at level oracle, before)
+    "copi-predictive": [{"alpha": 1.0}, {"alpha": 0.0}, {"alpha": 2.0},
+                        {"alpha": 1.0, "margin": 0.2}, {"alpha": 1.0, "escape": 0.2},
+                        {"alpha": 1.0, "horizon": 20}],
     "navground-hrvo": [{"safety_margin": v} for v in (0.1, 0.3, 0.6, 1.0)],
     "navground-hl": [{"safety_margin": v} for v in (0.1, 0.3, 0.6, 1.0)],
 }

@@ -113,3 +113,31 @@ def test_watch_draws_what_it_expected(predictive_caps: Path, tmp_path: Path) -> 
     first = _frame(watched, 0, np.asarray(watched.sim.path), np.asarray(watched.sim.traces), 480)
     pink = np.all(np.abs(first.reshape(-1, 3).astype(int) - (0xF2, 0xA7, 0xC3)) < 12, axis=1)
     assert pink.sum() > 20  # the first: the futures it expected, drawn
+
+
+def test_many_agents_decide_at_once_as_one_by_one(predictive_caps: Path) -> None:
+    """act_many (threads: the compiled kernels release the GIL) gives each agent the move
+    it makes alone, whatever the number of workers."""
+    from copi.runs import make_task
+
+    caps = Capabilities.load(predictive_caps)
+    sims = [draw_episode("crowd", k, 1) for k in range(4)]
+
+    def agents() -> list[PredictiveAgent]:
+        out = []
+        for sim in sims:
+            a = PredictiveAgent(caps)
+            a.reset(make_task(sim, "map"))
+            out.append(a)
+        return out
+
+    from copi.core import Observation
+
+    obs = [Observation(ranges=s.ranges.copy(), goal=s.goal - s.position,
+                       position=s.position.copy(), static=s.sensor.scan(s.world, s.position))
+           for s in sims]  # fmt: skip
+    alone = np.array([a.act(o) for a, o in zip(agents(), obs, strict=True)])
+    for workers in (1, 2, 4):
+        assert np.array_equal(PredictiveAgent.act_many(agents(), obs, workers=workers), alone)
+    with pytest.raises(ValueError, match="one observation per agent"):
+        PredictiveAgent.act_many(agents(), obs[:2])

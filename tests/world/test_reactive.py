@@ -132,6 +132,7 @@ def test_circle_crossing_is_crowdnav_s() -> None:
         assert (d[~np.eye(len(pts), dtype=bool)] >= 0.8 - 1e-9).all()
         assert o.behaviour == "orca" and not o.sees_agent and not o.new_goals
         assert np.isclose(o.radius[0], 0.3 * s) and np.isclose(o.time_horizon, 20.0)
+        assert np.isclose(o.safety_margin, 0.02 * s)  # two radii each 0.01 m larger
 
 
 def test_square_crossing_is_crowdnav_s() -> None:

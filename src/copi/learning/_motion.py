@@ -254,7 +254,7 @@ def learn_motion(
     return MotionModel(turn, speed, start, radius, stats).check()
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)  # nogil: many agents draw at once in threads
 def sample_motion(  # type: ignore[no-untyped-def]
     bodies, segs, n_samples, horizon, seed, turn_cdf, speed_cdf, start_cdf, ahead_edges,
     speed_edges, clear, cx0, cy0, ch,

@@ -15,6 +15,9 @@ the planner checks its moves with, against futures the agent learnt to expect.
 from __future__ import annotations
 
 import math
+import os
+from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 import numpy as np
@@ -173,6 +176,31 @@ class PredictiveAgent(Agent):
                                    "extra": extra.copy(), "risk": risk,
                                    "waits": m == len(pl.moves) - 1}  # fmt: skip
         return move
+
+    @staticmethod
+    def act_many(
+        agents: Sequence[PredictiveAgent],
+        observations: Sequence[Observation],
+        *,
+        workers: int | None = None,
+    ) -> NDArray[np.float64]:
+        """Many agents' decisions at once (each agent's :meth:`act` on its observation),
+        ``workers`` threads at a time (default: the machine's cores): the drawing of
+        futures and the planning are compiled kernels that release the GIL, so the
+        agents plan in parallel; each agent keeps its own generator, so the moves are the
+        same whatever the number of workers. Returns (b, 2)."""
+        if len(agents) != len(observations):
+            raise InvalidArgumentError(f"one observation per agent: {len(agents)} agents, "
+                                       f"{len(observations)} observations")  # fmt: skip
+        if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
+                                    or workers < 1):  # fmt: skip
+            raise InvalidArgumentError(f"workers must be a positive int; got {workers!r}")
+        n = min(len(agents), workers or os.cpu_count() or 1)
+        if n <= 1:
+            return np.array([a.act(o) for a, o in zip(agents, observations, strict=True)])
+        with ThreadPoolExecutor(n) as pool:
+            moves = list(pool.map(lambda a, o: a.act(o), agents, observations))
+        return np.array(moves).reshape(-1, 2)
 
     def counters(self) -> dict[str, Any]:
         """Per-episode diagnostics stored with the result."""

@@ -210,7 +210,7 @@ def field_grid(dist, fx0, fy0, fh, x0, y0, res, ny, nx, gx, gy):  # type: ignore
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)  # nogil: many agents plan at once in threads
 def window(ok, mid_ok, terminal, goal, i0, j0, n):  # type: ignore[no-untyped-def]
     """The n x n window of the episode's grids whose corner cell is (i0, j0); cells off
     the grids are walls."""
@@ -238,7 +238,7 @@ def window(ok, mid_ok, terminal, goal, i0, j0, n):  # type: ignore[no-untyped-de
 
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)  # nogil: many agents plan at once in threads
 def escape_move(  # type: ignore[no-untyped-def]
     px, py, gx, gy, tol, r, segs, samples, radii, moves, margin, escape_margin, V, x0, y0,
     res, loss, dist, fx0, fy0, fh, extra, costs,
@@ -316,7 +316,7 @@ def escape_move(  # type: ignore[no-untyped-def]
     return best, best_cost, best_hit
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)  # nogil: many agents plan at once in threads
 def hindsight_values(  # type: ignore[no-untyped-def]
     samples, radii, agent_r, margin, x0, y0, res, ok, terminal, goal, offsets, mid_ok, cap,
     box=-1,

@@ -134,7 +134,38 @@ def _overview(
         "",
         *delta,
         "",
+        *_said(families, table, diffs, reference),
     ]
+
+
+def _said(
+    families: list[str],
+    table: dict[str, dict[MethodRun, dict[str, Any]]],
+    diffs: dict[str, dict[MethodRun, tuple[PairedDifference, PairedDifference] | None]],
+    reference: str,
+) -> list[str]:
+    """What the tables say, in words, read from their data (never typed): per family,
+    the row with the most successes, and the rows with more or fewer successes than the
+    reference at their level, the paired interval excluding zero (the analysis pages
+    quote this section instead of comparing by hand)."""
+    out = ["### What the tables say", ""]
+    for family in families:
+        rows = table[family]
+        best = max(rows, key=lambda a: rows[a]["success"])
+        more: list[str] = []
+        fewer: list[str] = []
+        for arm, pair in diffs[family].items():
+            if pair is None or not pair[0].excludes_zero or pair[0].n < MIN_PAIRS:
+                continue
+            (more if pair[0].estimate > 0 else fewer).append(
+                f"{arm.method} ({arm.sensing}, {format_difference(pair[0])})")
+        out += [
+            f"**{_family_title(family)}**: most successes {best.method} at {best.sensing} "
+            f"({100 * rows[best]['success']:.1f} %); more than {reference}: "
+            f"{'; '.join(more) or 'none'}; fewer: {'; '.join(fewer) or 'none'}.",
+            "",
+        ]
+    return out
 
 
 def _family_title(family: str) -> str:

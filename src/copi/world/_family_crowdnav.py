@@ -57,7 +57,8 @@ class CrowdNavSettings:
     max_neighbors: int = 10
     neighbor_dist: float = 10.0
     radius_extra: float = 0.01
-    """ORCA sees each human 0.01 m larger than it is."""
+    """ORCA sees every agent 0.01 m larger than it is (so two, 0.02 m farther apart:
+    navground's safety margin, added once to the sum of radii, is twice this)."""
     half_width: float = 10.0
     """copi's walls, this far from the centre (CrowdNav has none)."""
 
@@ -73,7 +74,7 @@ def _spec(starts: list[np.ndarray], goals: list[np.ndarray]) -> ObstacleSpec:
         count=(len(starts), len(starts)), radius=(c.radius * s, c.radius * s),
         speed=c.v_pref * c.time_step * s,
         behaviour="orca", sees_agent=False, time_horizon=c.time_horizon / c.time_step,
-        safety_margin=c.radius_extra * s, neighbours=c.max_neighbors, new_goals=False,
+        safety_margin=2 * c.radius_extra * s, neighbours=c.max_neighbors, new_goals=False,
         positions=tuple(tuple(p * s) for p in starts), goals=tuple(tuple(g * s) for g in goals),
     )  # fmt: skip
 

@@ -1,0 +1,141 @@
+"""CrowdNav's scenarios: every copi method and baseline on the same 500 episodes, beside
+the numbers CrowdNav's authors and its successor published (docs/crowdnav.md).
+
+    python studies/crowdnav.py --bench results/crowdnav --episodes 500 --out docs/crowdnav.md
+
+Runs ``copi benchmark --families circle-crossing,square-crossing`` (the default methods,
+the reference planners and the ORCA robot with CrowdNav's settings; resumable) into one
+directory, then writes the page: CrowdNav's metrics per method from the store, and the
+published rows with their source, each saying which setting differs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from studies._common import kept_times  # noqa: E402
+
+FAMILIES = ("circle-crossing", "square-crossing")
+EXTRA = ["crowdnav-orca", "tracked-mpc", "copi-predictive", "model-oracle"]
+"""Run beside the default methods: CrowdNav's own ORCA robot, and the planners."""
+
+PUBLISHED = [
+    # (method, success, collision, navigation time s, discomfort, source, verified, differs)
+    ("SARL (value network, true human states)", 1.00, 0.00, 10.58, None,
+     "vita-epfl/CrowdNav, pull request 34 (commit b8d7979), "
+     "crowd_nav/data/output-torch-1.7.0-converted/output.log, last line", True,
+     "circle crossing, 5 humans, invisible robot, holonomic, 500 test episodes; its "
+     "discomfort (0.34) is on the formula CrowdNav replaced in 2021, so not shown"),
+    ("ORCA as the robot", 0.43, 0.57, 10.86, None,
+     "Chen et al., ICRA 2019, Table I (as cited by secondary notes; the paper's table "
+     "itself was not read)", False,
+     "circle crossing, 5 humans, invisible robot"),
+    ("ORCA as the robot", 0.69, 0.29, 14.77, None,
+     "Shuijing725/CrowdNav_Prediction_AttnGraph (commit 3907731), "
+     "trained_models/ORCA_no_rand/test/*.log", True,
+     "CrowdNav++: 20 humans on a circle of 8.49 m who take new goals, 50 s limit, robot "
+     "start and goal random: another scenario"),
+    ("social force as the robot", 0.34, 0.64, 19.95, None,
+     "Shuijing725/CrowdNav_Prediction_AttnGraph (commit 3907731), "
+     "trained_models/SF_no_rand/test/*.log", True,
+     "CrowdNav++'s scenario (as above)"),
+]  # fmt: skip
+
+
+def _bench(bench: Path, episodes: int, methods: list[str] | None, workers: int) -> None:
+    cmd = [sys.executable, "-m", "copi", "benchmark", "-o", str(bench), "--families",
+           ",".join(FAMILIES), "--episodes", str(episodes), "--workers", str(workers),
+           "--against", "straight"]  # fmt: skip
+    if methods:
+        cmd += ["--methods", ",".join(methods)]
+    subprocess.run(cmd, check=True)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--bench", default="results/crowdnav")
+    ap.add_argument("--episodes", type=int, default=500)
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--out", default="docs/crowdnav.md")
+    a = ap.parse_args()
+    from copi.methods import default_methods, method_spec
+    from copi.reports import read_benchmark
+    from copi.world import family_spec
+
+    bench = Path(a.bench)
+    measured = {}
+    t0 = time.perf_counter()
+    _bench(bench, a.episodes, None, a.workers)  # the default methods
+    extra = [m for m in EXTRA if method_spec(m).available()]
+    _bench(bench, a.episodes, extra, a.workers)
+    took = time.perf_counter() - t0
+    measured["all"] = (took, {"seconds": round(took), "workers": a.workers})
+    timing = kept_times(bench / "crowdnav-timing.json", measured)
+    groups, _, _ = read_benchmark(bench / "benchmark.sqlite")
+    own = family_spec("circle-crossing").episode
+    assert own is not None and own.seconds_per_step is not None
+    dt = own.seconds_per_step
+    lines = [
+        "# CrowdNav's scenarios",
+        "",
+        "<!-- generated: written whole by studies/crowdnav.py -->",
+        "",
+        f"`python studies/crowdnav.py --bench {a.bench} --episodes {a.episodes}` "
+        f"({timing['all']['seconds'] / 60:.0f} min, {timing['all']['workers']} workers). "
+        "CrowdNav's circle and square crossing (5 humans driven by ORCA toward their own "
+        "goals, the robot invisible to them, a step of 0.25 s, 24 s at most) in copi's "
+        "units, every method on the same episodes (seed 0, episodes 0 to "
+        f"{a.episodes - 1}); what is CrowdNav's and what differs: "
+        "[the families](families.md) and `copi.world.circle_crossing`'s documentation. "
+        "Rates are shares of the episodes; the navigation time is the mean over successes "
+        "(seconds); the discomfort frequency is the share of all steps that ended closer "
+        "than 0.2 m to a human (CrowdNav's formula since 2021). Methods of default "
+        "capabilities were learnt in copi's own families, at copi's scale (an agent of "
+        "radius 0.3 among discs of 0.5 to 1), not in these worlds (an agent of 1.2 among "
+        "discs of 1.2).",
+        "",
+    ]
+    known = {m: i for i, m in enumerate(default_methods() + tuple(EXTRA))}
+    for fam in FAMILIES:
+        arms = groups.get(fam, {})
+        if not arms:
+            continue
+        lines += [f"## {fam}", "",
+                  "| method | level | n | success | collision | timeout | navigation time (s) "
+                  "| discomfort |", "|---|---|---|---|---|---|---|---|"]  # fmt: skip
+        order = sorted(arms, key=lambda arm: (known.get(arm.method, len(known)), arm.sensing))
+        for arm in order:
+            rs = [r for r in arms[arm] if r.outcome != "skipped"]
+            n = len(rs)
+            won = [r.steps * dt for r in rs if r.outcome == "success"]
+            steps = sum(r.steps for r in rs)
+            close = sum(r.close_steps or 0 for r in rs)
+            time_s = sum(won) / len(won) if won else math.nan
+            lines.append(
+                f"| {arm.method} | {arm.sensing} | {n} "
+                f"| {sum(r.outcome == 'success' for r in rs) / n:.2f} "
+                f"| {sum(r.outcome == 'collision' for r in rs) / n:.2f} "
+                f"| {sum(r.outcome == 'timeout' for r in rs) / n:.2f} "
+                f"| {time_s:.2f} | {close / steps:.3f} |"
+            )
+        lines.append("")
+    lines += ["## Published", "",
+              "| method | success | collision | navigation time (s) | source | verified here "
+              "| what differs from copi's circle crossing |",
+              "|---|---|---|---|---|---|---|"]  # fmt: skip
+    for name, s, c, t, _d, source, verified, differs in PUBLISHED:
+        lines.append(f"| {name} | {s:.2f} | {c:.2f} | {t:.2f} | {source} "
+                     f"| {'yes' if verified else 'no'} | {differs} |")  # fmt: skip
+    Path(a.out).write_text("\n".join(lines) + "\n")
+    print(f"wrote {a.out}")
+
+
+if __name__ == "__main__":
+    main()

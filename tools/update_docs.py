@@ -42,7 +42,8 @@ RESULTS: list[tuple[str, str, str]] = [
      "the global direction (its last column: against `straight`)"),
     ("rl.md#A new task", "| ppo-chauffeur",
      "**A new task**, the homicidal chauffeur's evader: copi-learnt's capabilities "
-     "unchanged, against PPO trained for the game with the same step budget"),
+     "unchanged (its hand-written guard included), against PPO trained for the game with "
+     "the same step budget (a peer that learnt little: see below)"),
 ]
 """(source page, the row's first cell, what the line says of it): each headline is the
 row of a generated table whose first cells match, quoted whole."""

@@ -13,6 +13,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from benchmarks import (  # noqa: E402
     bench_baselines,
+    bench_crowd,
     bench_games,
     bench_learning,
     bench_lifelong,
@@ -26,7 +27,7 @@ from benchmarks._timing import RECORD  # noqa: E402
 BENCHMARKS = {
     "world": bench_world, "planning": bench_planning, "learning": bench_learning,
     "online": bench_online, "games": bench_games, "baselines": bench_baselines,
-    "lifelong": bench_lifelong, "rl": bench_rl,
+    "lifelong": bench_lifelong, "rl": bench_rl, "crowd": bench_crowd,
 }  # fmt: skip
 
 

@@ -4,8 +4,8 @@ scenarios as families."""
 from __future__ import annotations
 
 import copy
-import re
 import math
+import re
 from pathlib import Path
 
 import numpy as np

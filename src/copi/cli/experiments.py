@@ -419,7 +419,11 @@ def report_command(
         if not r.exists():
             raise InvalidArgumentError(f"{r}: no such results file")
         with ResultsStore(r, readonly=True) as store:  # refused before anything is written
-            store.runs()  # (a damaged run's configuration too)
+            kinds = {run.experiment for run in store.runs()}  # (a damaged one's too)
+        if kinds == {"crowd"}:
+            raise InvalidArgumentError(f"{r} holds crowd runs: copi crowd writes their "
+                                       "figure and GIF beside the store (copi report reads "
+                                       "Experiments 1 to 3)")  # fmt: skip
     check_outputs(
         {"the report's directory": (output, "directory"),
          "the report": (output / "report.md", "text")},

@@ -28,7 +28,7 @@ from copi.cli._common import app, console
 from copi.errors import CopiError, PluginWarning
 
 # Importing a group's module registers its commands; this order is the order of --help.
-for _group in ("world", "learning", "experiments", "watch", "rl"):
+for _group in ("world", "learning", "experiments", "watch", "rl", "crowd"):
     importlib.import_module(f"copi.cli.{_group}")
 
 
@@ -86,7 +86,7 @@ def _ctrl_c_inside(exc: BaseException) -> KeyboardInterrupt | None:
 _PATH_OPTIONS = frozenset({"-o", "--output", "--checkpoints", "--maps", "--from-maps"})
 """Options naming a directory or a file to write, where "." is a sensible value."""
 
-_NAMED = ("evaluate", "benchmark", "watch", "lifelong", "learn", "pursuit")
+_NAMED = ("evaluate", "benchmark", "watch", "lifelong", "learn", "pursuit", "crowd")
 """Commands whose --help ends with the registered methods, families and presets."""
 
 

@@ -1,7 +1,8 @@
 """copi's environments for other people's learners: the Gymnasium navigation
 environment (``copi/Navigation-v0``, :mod:`copi.envs.navigation`), the environment a
-local policy learns in (:mod:`copi.envs.local_policy`), and the homicidal chauffeur as
-a PettingZoo ``ParallelEnv`` (:mod:`copi.envs.chauffeur`), and their registration.
+local policy learns in (:mod:`copi.envs.local_policy`), the homicidal chauffeur
+(:mod:`copi.envs.chauffeur`) and many agents among each other (:mod:`copi.envs.crowd`)
+as PettingZoo ``ParallelEnv`` environments, and their registration.
 
 The environments are reached through their modules (or as this package's attributes,
 imported when first used), so that ``import copi``, which registers the ids, stays
@@ -17,11 +18,13 @@ from copi.envs.registration import ENV_IDS, register_envs
 
 if TYPE_CHECKING:
     from copi.envs.chauffeur import ChauffeurEnv, parallel_env
+    from copi.envs.crowd import CrowdEnv
     from copi.envs.local_policy import LocalPolicyEnv, Reward
     from copi.envs.navigation import NavigationEnv
 
 __all__ = [
     "ChauffeurEnv",
+    "CrowdEnv",
     "ENV_IDS",
     "LocalPolicyEnv",
     "NavigationEnv",
@@ -33,6 +36,7 @@ __all__ = [
 _LAZY = {
     "ChauffeurEnv": "copi.envs.chauffeur",
     "parallel_env": "copi.envs.chauffeur",
+    "CrowdEnv": "copi.envs.crowd",
     "LocalPolicyEnv": "copi.envs.local_policy",
     "Reward": "copi.envs.local_policy",
     "NavigationEnv": "copi.envs.navigation",

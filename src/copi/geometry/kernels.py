@@ -22,6 +22,20 @@ from numba import njit
 
 
 @njit(cache=True, inline="always")
+def ray_disc(dx, dy, vx, vy, cc):  # type: ignore[no-untyped-def]
+    """How far along the unit ray (dx, dy) a disc is first hit, from a point at (vx, vy)
+    from the disc's centre, ``cc`` = vx² + vy² − r² > 0 (the point outside it); inf when
+    the ray misses it or it lies behind."""
+    b = dx * vx + dy * vy
+    if b >= 0.0:
+        return np.inf
+    disc = b * b - cc
+    if disc < 0.0:
+        return np.inf
+    return -b - math.sqrt(disc)
+
+
+@njit(cache=True, inline="always")
 def _scan_into(ox, oy, cos, sin, segs, centers, radii, max_range, out):  # type: ignore[no-untyped-def]
     n = cos.shape[0]
     for i in range(n):
@@ -69,13 +83,7 @@ def _scan_into(ox, oy, cos, sin, segs, centers, radii, max_range, out):  # type:
         if vx * vx + vy * vy >= reach * reach:
             continue
         for i in range(n):
-            b = cos[i] * vx + sin[i] * vy
-            if b >= 0.0:
-                continue
-            disc = b * b - cc
-            if disc < 0.0:
-                continue
-            t = -b - math.sqrt(disc)
+            t = ray_disc(cos[i], sin[i], vx, vy, cc)
             if t < out[i]:
                 out[i] = t
 

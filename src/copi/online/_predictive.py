@@ -49,7 +49,9 @@ class PredictiveAgent(Agent):
     capabilities : Capabilities
         Learnt with a model of what moves and safety priors (``copi learn --preset
         predictive``).
-    samples, horizon, loss, margin, escape : see :class:`FuturesPlanner`.
+    samples, horizon, loss, margin, escape : see :class:`FuturesPlanner` (the model-oracle's
+        settings, but a horizon of 20 steps: the best of six settings on validation seed
+        1, docs/tuning-predictive.md).
     alpha, beta : float
         Weights, in steps, of the learnt safety network and of the template priors.
     seed : int
@@ -65,7 +67,7 @@ class PredictiveAgent(Agent):
         *,
         name: str = "copi-predictive",
         samples: int = 32,
-        horizon: int = 14,
+        horizon: int = 20,
         alpha: float = 1.0,
         beta: float = 0.0,
         loss: float = 200.0,

@@ -1,0 +1,192 @@
+"""Many agents among each other (copi.world.crowd): the batched scans through the grid are
+RangeSensor's scans with every other agent as a disc, the grid finds what brute force
+finds, contacts are closest approaches, placement keeps discs apart, memory is linear."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from copi.errors import InvalidArgumentError
+from copi.geometry.kernels import closest_approach
+from copi.world import RangeSensor, World
+from copi.world.crowd import (
+    COLLISION,
+    MAX_DENSITY,
+    PLACEMENT_GAP,
+    RUNNING,
+    SUCCESS,
+    Crowd,
+    cell_sectors,
+    crowd_room,
+    place_agents,
+)
+from tests.common import PILLARS
+
+SENSOR = RangeSensor()
+
+
+def _brute_scan(crowd: Crowd, b: int) -> np.ndarray:
+    """Agent b's reading by RangeSensor.scan, every other agent in the world a disc."""
+    others = np.flatnonzero(crowd.active)
+    others = others[others != b]
+    return SENSOR.scan(crowd.world, crowd.positions[b], crowd.positions[others],
+                       np.full(len(others), crowd.radius))  # fmt: skip
+
+
+def _check_scans(crowd: Crowd) -> None:
+    for b in np.flatnonzero(crowd.active):
+        assert np.array_equal(crowd.ranges[b], _brute_scan(crowd, b)), b
+
+
+@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    agents=st.integers(2, 160),
+    density=st.sampled_from([0.02, 0.1, 0.4, 1.0]),
+    seed=st.integers(0, 2**32 - 1),
+    moves=st.integers(0, 6),
+    cell=st.sampled_from([None, 0.5, 3.0, 40.0]),
+)
+def test_batched_scans_are_range_sensor_scans_bit_for_bit(
+    agents: int, density: float, seed: int, moves: int, cell: float | None
+) -> None:
+    crowd = Crowd.draw(crowd_room(agents, density), agents, seed, cell_size=cell)
+    _check_scans(crowd)
+    rng = np.random.default_rng(seed)
+    for _ in range(moves):  # agents that touch or arrive leave; some overlap on the way
+        crowd.step(rng.uniform(-1, 1, (agents, 2)) + 0.3 * (crowd.goals - crowd.positions))
+        _check_scans(crowd)
+
+
+def test_scans_in_a_world_with_holes_and_in_slices() -> None:
+    crowd = Crowd.draw(PILLARS, 120, seed=3)
+    _check_scans(crowd)
+    whole = crowd.ranges.copy()
+    crowd.ranges[:] = -1.0
+    crowd.index()
+    for lo, hi in ((0, 50), (50, 120)):
+        crowd.scan(lo, hi)
+    assert np.array_equal(crowd.ranges, whole)
+
+
+def test_a_centre_inside_another_disc_reads_zero() -> None:
+    room = crowd_room(2, 0.01)
+    crowd = Crowd(room, [[5.0, 5.0], [5.2, 5.0]], [[9.0, 9.0], [1.0, 1.0]])
+    assert (crowd.ranges == 0).all()
+    _check_scans(crowd)
+
+
+def test_cell_sectors_hold_every_ray_that_can_meet_a_disc_of_the_cell() -> None:
+    rng = np.random.default_rng(0)
+    h, r, n = 2.0, 0.3, 32
+    table = cell_sectors(h, r, n, 10.0)
+    angles = SENSOR.angles
+    for di, dj, first, m, near in table:
+        for _ in range(30):  # an agent anywhere in cell (0, 0), a disc anywhere in (di, dj)
+            o = rng.uniform(0, h, 2)
+            c = (np.array([di, dj]) + rng.uniform(0, 1, 2)) * h
+            assert np.hypot(*(c - o)) - r >= near - 1e-12
+            hit = SENSOR.scan(World([[-99, -99], [99, -99], [99, 99], [-99, 99]]), o, [c], r)
+            rays = np.flatnonzero(hit < 10.0)
+            inside = (rays - first) % n < m
+            assert inside.all(), (di, dj, rays, first, m, angles[rays])
+    assert (table[:-1, 4] <= table[1:, 4]).all()  # nearest first
+
+
+def test_the_grid_finds_the_agents_brute_force_finds() -> None:
+    crowd = Crowd.draw(crowd_room(400, 0.3), 400, seed=5)
+    crowd.active[::7] = False
+    crowd.index()
+    for b in range(0, 400, 13):
+        for reach in (0.8, 3.0, 10.3):
+            d = np.hypot(*(crowd.positions - crowd.positions[b]).T)
+            want = np.flatnonzero(crowd.active & (d <= reach))
+            want = want[want != b]
+            assert sorted(crowd.neighbours(b, reach).tolist()) == want.tolist()
+
+
+def test_contacts_are_the_closest_approaches_of_the_moves() -> None:
+    rng = np.random.default_rng(2)
+    for seed in range(4):
+        crowd = Crowd.draw(crowd_room(150, 0.8), 150, seed=seed)
+        old = crowd.positions.copy()
+        res = crowd.step(rng.uniform(-1.5, 1.5, (150, 2)), leave=False)
+        new = crowd.positions
+        for b in range(150):
+            best = math.inf
+            for k in range(150):
+                if k != b:
+                    d = closest_approach(*old[b], *(new[b] - old[b]), *old[k], *(new[k] - old[k]))
+                    best = min(best, d - 2 * crowd.radius)
+            if best < 2 * crowd.radius + 2.0:  # beyond, no agent can be met: inf
+                assert res.gap[b] == best
+            assert res.contact[b] == (best < 0)
+
+
+def test_placement_keeps_discs_apart_and_off_the_walls_and_is_seeded() -> None:
+    room = crowd_room(800, 1.2)
+    starts, goals = place_agents(room, 800, 7)
+    d = np.hypot(*(starts[:, None] - starts[None]).T)
+    np.fill_diagonal(d, np.inf)
+    assert d.min() >= 2 * 0.3 + PLACEMENT_GAP
+    assert room.clearance(starts).min() >= 0.3 + PLACEMENT_GAP
+    assert room.clearance(goals).min() >= 0.3
+    assert np.hypot(*(goals - starts).T).min() >= 10.0
+    again = place_agents(room, 800, 7)
+    assert np.array_equal(again[0], starts) and np.array_equal(again[1], goals)
+
+
+def test_agents_that_cannot_be_placed_are_refused_saying_how_many_fit() -> None:
+    with pytest.raises(InvalidArgumentError, match=r"cannot place 300 agents .* only \d+ fitted"):
+        place_agents(World([[0, 0], [12, 0], [12, 12], [0, 12]]), 300, 0)
+    with pytest.raises(InvalidArgumentError, match=f"at most {MAX_DENSITY:g} agents per"):
+        crowd_room(100, 3.0)
+    with pytest.raises(InvalidArgumentError, match="at most 100,000"):
+        crowd_room(100_001, 0.1)
+
+
+def test_walls_stop_agents_and_trips_end_at_goals_or_contacts() -> None:
+    room = World([[0, 0], [30, 0], [30, 30], [0, 30]])
+    starts = [[1.0, 15.0], [10.0, 10.0], [20.0, 10.0], [10.0, 25.0], [12.0, 25.0]]
+    goals = [[25.0, 15.0], [10.0, 12.0], [25.0, 25.0], [20.0, 25.0], [2.0, 25.0]]
+    crowd = Crowd(room, starts, goals)
+    crowd.step([[-5.0, 0.0], [0.0, 1.0], [0.0, 1.0], [1.0, 0.0], [-1.0, 0.0]])
+    assert crowd.positions[0, 0] >= 0.3  # stopped by the wall (less its tiny gap)
+    assert crowd.outcome.tolist() == [RUNNING, RUNNING, RUNNING, COLLISION, COLLISION]
+    res = crowd.step([[0.0, 0.0], [0.0, 1.0], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]])
+    assert res.reached.tolist() == [False, True, False, False, False]
+    assert crowd.outcome[1] == SUCCESS and crowd.ended[1] == 2
+    assert crowd.active.tolist() == [True, False, True, False, False]
+    assert crowd.trip_length[1] == pytest.approx(2.0)
+
+
+def test_a_steady_crowd_keeps_every_agent_and_draws_new_goals() -> None:
+    crowd = Crowd.draw(crowd_room(60, 0.05), 60, seed=1)
+    first = crowd.goals.copy()
+    for _ in range(80):
+        crowd.step(crowd.goals - crowd.positions, leave=False)
+    assert crowd.active.all()
+    arrived = crowd.arrivals > 0
+    assert arrived.any()
+    assert (crowd.goals[arrived] != first[arrived]).any(axis=1).all()
+    assert np.isin(crowd.outcome, [SUCCESS, COLLISION]).sum() >= arrived.sum()
+
+
+def test_memory_is_linear_in_the_agents() -> None:
+    per = [Crowd.draw(crowd_room(n, 0.2), n, seed=0).nbytes / n for n in (1000, 8000)]
+    assert per[1] == pytest.approx(per[0], rel=0.05)
+    assert per[0] < 2000
+
+
+def test_actions_are_checked() -> None:
+    crowd = Crowd.draw(crowd_room(5, 0.1), 5, seed=0)
+    with pytest.raises(InvalidArgumentError, match=r"shape \(5, 2\)"):
+        crowd.step(np.zeros((4, 2)))
+    bad = np.zeros((5, 2))
+    bad[3, 1] = np.nan
+    with pytest.raises(InvalidArgumentError, match="agent 3"):
+        crowd.step(bad)

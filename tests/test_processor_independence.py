@@ -91,10 +91,48 @@ def test_learning_and_decisions_are_the_same_on_another_processor() -> None:
     assert not differ, f"results depend on the processor: {differ}"
 
 
-def test_the_other_run_compiles_for_another_processor() -> None:
-    """The comparison above means something only if the other run really compiled for
-    another processor: numba reports the CPU it targets."""
-    code = "import numba.core.config as c; print(c.CPU_NAME)"
-    res = subprocess.run([sys.executable, "-c", code], env={**os.environ, **_elsewhere()},
+PROBE = r"""
+import json
+import numba, threadpoolctl
+import numpy as np
+from numpy._core import _multiarray_umath as m
+
+@numba.njit
+def axpy(a, x, y):
+    for i in range(x.shape[0]):
+        y[i] += a * x[i]
+
+axpy(2.0, np.ones(64), np.ones(64))
+asm = axpy.inspect_asm(axpy.signatures[0]).lower()
+print(json.dumps({
+    "ymm": "%ymm" in asm or "%zmm" in asm,
+    "numpy": {f: bool(m.__cpu_features__.get(f)) for f in m.__cpu_dispatch__},
+    "blas": sorted({str(i.get("architecture")) for i in threadpoolctl.threadpool_info()
+                    if i.get("internal_api") == "openblas"}),
+}))
+"""
+
+
+def _probe(extra: dict[str, str]) -> dict:
+    res = subprocess.run([sys.executable, "-c", PROBE], env={**os.environ, **extra},
                          capture_output=True, text=True, timeout=120)  # fmt: skip
-    assert res.stdout.strip() == "generic", res.stderr
+    assert res.returncode == 0, res.stderr[-3000:]
+    return json.loads(res.stdout.strip().splitlines()[-1])
+
+
+def test_the_other_run_compiles_for_another_processor() -> None:
+    """The comparison above means something only if the other run really computed as
+    another processor would: asked, in a fresh interpreter with the same settings, what
+    each library actually does. numba's code for a loop it vectorises uses no AVX
+    register (a generic x86-64 has none; this machine's code does, where it has AVX);
+    numpy's dispatched SIMD features this machine has read as absent; OpenBLAS runs its
+    Nehalem kernels."""
+    here, there = _probe({}), _probe(_elsewhere())
+    dispatched = [f for f, on in here["numpy"].items() if on]
+    assert not any(there["numpy"][f] for f in dispatched), there["numpy"]
+    if platform.machine().lower() in ("x86_64", "amd64"):
+        assert not there["ymm"], "numba compiled the other run with AVX registers"
+        if here["numpy"].get("X86_V3") or here["numpy"].get("AVX2"):
+            assert here["ymm"], "this machine has AVX, yet its own run did not use it"
+        if here["blas"]:
+            assert there["blas"] == ["Nehalem"], there["blas"]

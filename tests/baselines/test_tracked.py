@@ -121,6 +121,15 @@ def test_a_disc_seen_waiting_moves_at_the_speed_given():
     assert np.allclose(none[:, 1], none[:, 0])  # no other disc moving: it waits
 
 
+def _discs_in_view(sim) -> int:
+    """How many discs the reading shows: those without which some ray reads otherwise."""
+    base = SENSOR.scan(sim.world, sim.position, sim.centers, sim.radii)
+    every = np.arange(len(sim.radii))
+    return sum(not np.array_equal(base, SENSOR.scan(sim.world, sim.position,
+                                                    sim.centers[every != d], sim.radii[every != d]))
+               for d in every)  # fmt: skip
+
+
 def test_tracked_mpc_runs_at_map_only_and_reports_its_estimates():
     sim = Simulator(ROOM, [5, 5], [35, 35], [(20.0, 20.0), (12.0, 12.0)], [0.7, 0.7], seed=1)
     agent = make_agent("tracked-mpc")
@@ -131,3 +140,30 @@ def test_tracked_mpc_runs_at_map_only_and_reports_its_estimates():
     c = agent.counters()
     assert c["mean_discs"] > 0 and c["speed"] > 0 and c["turn_sd"] > 0
     assert isinstance(agent, TrackedMPC)
+    # In a crowd episode its estimates are the simulator's: the discs' speed to a few
+    # hundredths (each displacement is measured from two fitted circles), their turn
+    # spread to within a factor of two (measured while the agent moves, from a few dozen
+    # turns, some of them off walls), and the discs it makes out, on average, those its
+    # reading shows (a disc hidden behind another, or two seen as one arc, aside)
+    from copi.runs import draw_episode
+
+    sim = draw_episode("crowd", 0, 0)
+    agent = make_agent("tracked-mpc")
+    in_view = []
+    act = agent.act
+
+    def counting(obs):  # type: ignore[no-untyped-def]
+        in_view.append(_discs_in_view(sim))
+        return act(obs)
+
+    agent.act = counting  # type: ignore[method-assign]
+    out = run_episode(agent, sim, sensing="map", max_steps=300)
+    c = agent.counters()
+    tracker = agent.tracker  # type: ignore[attr-defined]
+    assert len(tracker._speeds) >= 20 and len(tracker._turns) >= 20  # measured, not priors
+    assert abs(c["speed"] - sim.speed) < 0.05, (c, sim.speed)
+    assert 0.5 < c["turn_sd"] / sim.turn_sd < 2.0, (c, sim.turn_sd)
+    # the turn spread is the robust one its docstring names: 1.4826 median |turn|
+    assert c["turn_sd"] == pytest.approx(1.4826 * np.median(np.abs(tracker._turns)))
+    assert len(in_view) == out.steps and np.mean(in_view) > 1
+    assert abs(c["mean_discs"] - np.mean(in_view)) < 0.2 * np.mean(in_view), (c, np.mean(in_view))

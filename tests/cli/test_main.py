@@ -316,13 +316,39 @@ def test_reproduce_into_a_directory_of_another_run_says_what_to_do(
 
 
 def test_learn_with_static_aware_safety(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    caps = tmp_path / "caps.npz"
-    code, out, err = run(
-        ["learn", "-o", str(caps), "--preset", "learnt", "--worlds", "3", "--steps", "80",
-         "--probe-worlds", "2", "--probe-steps", "20", "--probe-label", "escape",
-         "--safety-static"], capsys,
-    )  # fmt: skip
-    assert code == 0, err
+    """--safety-static learns safety networks that see the static reading: the file says
+    so, its networks (and nothing else) differ from those learnt without it on the same
+    probes, and they tell a hit the static map explains (a wall) from one it does not
+    (something that moves)."""
+    import numpy as np
+
+    from copi.learning import Capabilities
+    from copi.learning.kernels import kernel_net, safety_probabilities
+
+    args = ["--preset", "learnt", "--worlds", "3", "--steps", "80", "--probe-worlds", "2",
+            "--probe-steps", "20", "--probe-label", "escape"]  # fmt: skip
+    caps, plain = tmp_path / "caps.npz", tmp_path / "plain.npz"
+    for path, extra in ((caps, ["--safety-static"]), (plain, [])):
+        code, out, err = run(["learn", "-o", str(path), *args, *extra], capsys)
+        assert code == 0, err
     code, out, _ = run(["inspect", str(caps), "--json"], capsys)
     params = json.loads(out)["params"]
     assert params["safety_static"] is True and params["probe_label"] == "escape"
+    aware, blind = Capabilities.load(caps), Capabilities.load(plain)
+    assert aware.safety.static_aware is True and blind.safety.static_aware is False
+    # the same seed, the same exploration and probes: only what the networks saw differs
+    assert np.array_equal(aware.nodes, blind.nodes)
+    assert np.array_equal(aware.safety.template_safe, blind.safety.template_safe)
+    assert not np.array_equal(aware.safety.net, blind.safety.net)
+    # a hit 1 ahead on ray 0 (everything else out of range), a wall or a moving thing
+    s = np.full(32, 10.0)
+    s[0] = 1.0
+
+    def p_safe(static: np.ndarray) -> np.ndarray:
+        out = np.empty(17)
+        safety_probabilities(s, s, static, kernel_net(aware.safety.net), 16,
+                             np.empty(8 * 32), out)  # fmt: skip
+        return out
+
+    wall, moving = p_safe(s.copy()), p_safe(np.full(32, np.inf))
+    assert not np.allclose(wall, moving), (wall, moving)

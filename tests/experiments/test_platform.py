@@ -3,6 +3,7 @@ own worlds, help that names what is registered, one reader for copi's npz files.
 
 from __future__ import annotations
 
+import copy
 import json
 import zipfile
 from pathlib import Path
@@ -14,19 +15,37 @@ import pytest
 import copi  # noqa: F401  (registers the environments)
 from copi.learning import Capabilities
 from copi.methods import make_agent
-from copi.runs import run_in_env
+from copi.runs import run_episode, run_in_env
 from copi.world import World, save_worlds
 from tests.cli.test_faults import _one_line_error, run
 from tests.common import U_TRAP
 
 
 def test_copi_s_own_agent_runs_in_the_gymnasium_env(learnt_caps: Path) -> None:
-    agent = make_agent("copi-learnt", Capabilities.load(learnt_caps))
+    """The env and copi's runner agree: the same agent on the episode the env draws for
+    a seed, run by copi.runs.run_episode at level sensor (what the env tells an agent),
+    ends the same way, in the same number of steps, at the same place; and the env's
+    rewards add up to what its docstring says they are."""
+    caps = Capabilities.load(learnt_caps)
+    agent = make_agent("copi-learnt", caps)
     env = gymnasium.make("copi/Navigation-v0", max_episode_steps=200)
-    outcomes = [run_in_env(agent, env, seed=s) for s in range(4)]
-    for out in outcomes:
+    outcomes = []
+    for s in range(4):
+        _, info = env.reset(seed=s)
+        start = copy.deepcopy(env.unwrapped.sim)  # the episode at t = 0
+        out = run_in_env(agent, env, seed=s)
+        outcomes.append(out)
         assert out.outcome in ("success", "collision", "timeout") and 1 <= out.steps <= 200
         assert out.outcome != "success" or out.info["is_success"]
+        direct = run_episode(make_agent("copi-learnt", caps), start, sensing="sensor",
+                             max_steps=200)  # fmt: skip
+        assert (out.outcome, out.steps) == (direct.outcome, direct.steps), s
+        # the env's actions are float32: the same path to a few 1e-7 a step
+        np.testing.assert_allclose(env.unwrapped.sim.position, start.position, atol=1e-4)
+        # progress, less 0.01 a step, +10 at the goal, -10 at a contact (which ends it)
+        want = (info["distance"] - out.info["distance"] - 0.01 * out.steps
+                + 10.0 * (out.outcome == "success") - 10.0 * (out.outcome == "collision"))  # fmt: skip
+        assert out.reward == pytest.approx(want, abs=1e-9)
     again = run_in_env(make_agent("copi-learnt", Capabilities.load(learnt_caps)), env, seed=2)
     assert (again.steps, again.reward) == (outcomes[2].steps, outcomes[2].reward)
     # the env's radius and tolerance are what the agent is told, not guessed

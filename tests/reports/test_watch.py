@@ -1,5 +1,6 @@
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -95,12 +96,59 @@ def test_every_local_method_shows_its_candidates_and_the_chosen_one_scores_best(
     assert shown, f"{method}: no step scored more than one candidate"
 
 
+def _guard_admits(hits: np.ndarray, moving: np.ndarray, guard: float) -> np.ndarray:
+    """Which of the 16 compass moves (full steps of 1) the guard admits, as its rule is
+    written (copi.online.ContextController): after the step every moving hit at least
+    ``guard`` away, the step's path passing none nearer than half of that and no hit at
+    all, wall or not, nearer than 0.31 (the agent's radius and a hair; the nearest hit
+    is farther than that here). Worked out here, apart from the kernels."""
+    a = 2 * np.pi * np.arange(16) / 16
+    admitted = np.ones(16, dtype=bool)
+    for d, (ax, ay) in enumerate(zip(np.cos(a), np.sin(a), strict=True)):
+        for (px, py), mover in zip(hits, moving, strict=True):
+            end = math.sqrt((px - ax) ** 2 + (py - ay) ** 2)
+            t = min(max(px * ax + py * ay, 0.0), 1.0)  # the path's point nearest the hit
+            path = math.sqrt((px - t * ax) ** 2 + (py - t * ay) ** 2)
+            if (mover and (end < guard or path < 0.5 * guard)) or path < 0.31:
+                admitted[d] = False
+    return admitted
+
+
 def test_compass_guard_scores_are_the_kernels_own_verdicts() -> None:
     """A move the guard refuses alone is refused among all: the chosen move is the
-    best-aligned one the explanation admits (or, when it admits none, an escape)."""
+    best-aligned one the explanation admits (or, when it admits none, an escape). On
+    hand-built readings the verdicts are the guard's rule at the registered guard,
+    worked out apart from the kernels: a disc ahead just inside the guard refuses the
+    move toward it, one right at the guard does not, nor does a wall as near."""
     from copi.baselines import CompassGuard
-    from copi.core import Observation
+    from copi.core import Observation, Task
+    from copi.methods import make_agent, method_spec
     from copi.runs import draw_episode, make_task
+
+    guard = method_spec("compass-guard").params["guard"]  # what the benchmark runs
+    agent = make_agent("compass-guard")
+    agent.explain = True
+    agent.reset(Task("sensor", 0.3, 0.5, 32, 10.0))
+    goal = np.array([20.0, 1.0])  # about +x: move 0 the best-aligned
+    # the least distance ahead at which a disc's hit leaves the step along +x at least
+    # the guard away (its end 1 ahead: the hit at 1 + guard, to the last bit)
+    at = 1.0 + guard
+    while at - 1.0 >= guard:
+        at = np.nextafter(at, 0.0)
+    at = np.nextafter(at, np.inf)
+    cases = [(1.0 + 0.9 * guard, False, False), (np.nextafter(at, 0.0), False, False),
+             (at, False, True), (1.5, True, True)]  # (distance, a wall?, +x admitted?)
+    for distance, wall, ahead in cases:
+        ranges = np.full(32, 10.0)
+        ranges[0] = distance
+        static = ranges.copy() if wall else np.full(32, np.inf)
+        action = agent.act(Observation(ranges=ranges, goal=goal, static=static))
+        cands, scores, _ = agent.last_candidates
+        want = _guard_admits(np.array([[distance, 0.0]]), np.array([not wall]), guard)
+        assert want[0] == ahead, (distance, wall)
+        assert np.isfinite(scores).tolist() == want.tolist(), (distance, wall, scores)
+        best = int(np.argmax(np.where(want, cands @ goal, -np.inf)))  # best-aligned admitted
+        np.testing.assert_allclose(action, cands[best], atol=1e-12)
 
     sim = draw_episode("crowd", 5, 0)
     agent = CompassGuard()

@@ -1,6 +1,8 @@
 """Deep RL as copi's learning peer: the observation/action contract, the export of a
 trained actor to numpy (equal to torch's), a short training that beats a random policy,
-and bad policy files refused in one line."""
+and bad training options refused in one line. Everything here needs the extra rl
+(torch, Stable-Baselines3); what runs a trained policy without it is tested in
+tests/rl/test_policy.py, never skipped."""
 
 from __future__ import annotations
 
@@ -12,21 +14,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from copi.baselines import PolicyFormatError, PolicyWeights, PPOAgent, features, load_policy
+from copi.baselines import PPOAgent, load_policy
 from copi.baselines._ppo import direction_frame, save_policy, to_world
 from copi.errors import InvalidArgumentError
 from tests.cli.test_faults import _one_line_error, run
+from tests.rl.test_policy import _random_policy
 
 torch = pytest.importorskip("torch", reason="the optional extra rl (make install adds it)")
 sb3 = pytest.importorskip("stable_baselines3", reason="the optional extra rl")
-
-
-def _random_policy(seed: int = 0, net: tuple[int, ...] = (16, 16)) -> PolicyWeights:
-    rng = np.random.default_rng(seed)
-    sizes = [67, *net, 2]
-    layers = tuple((rng.normal(0, 0.5, (b, a)), rng.normal(0, 0.1, b))
-                   for a, b in zip(sizes, sizes[1:], strict=False))  # fmt: skip
-    return PolicyWeights(layers)
 
 
 def test_the_observation_is_what_the_agent_sees() -> None:
@@ -127,56 +122,6 @@ def test_a_short_training_beats_a_random_policy(tmp_path: Path) -> None:
         unregister_family("empty-room")
 
 
-def _tamper(src: Path, dst: Path, **changes: object) -> Path:
-    from copi._files import write_npz
-
-    with np.load(src) as z:
-        arrays = {k: z[k] for k in z.files}
-    meta = json.loads(str(arrays["metadata"][()]))
-    for k, v in changes.items():
-        if k in arrays:
-            arrays[k] = v  # type: ignore[assignment]
-        else:
-            meta[k] = v
-    arrays["metadata"] = np.array(json.dumps(meta))
-    write_npz(dst, arrays)
-    return dst
-
-
-@pytest.mark.parametrize(
-    ("change", "message"),
-    [
-        ({"w0": np.zeros((16, 99))}, "layer 0 takes 99 inputs; expected the observation's 67"),
-        ({"w0": np.full((16, 67), np.nan)}, "not finite or beyond"),
-        ({"b1": np.full(16, 1e9)}, "not finite or beyond"),
-        ({"w2": np.zeros((3, 16)), "b2": np.zeros(3)}, "the last layer gives 3 values"),
-        ({"observation": "pixels-v2"}, "a policy of observation 'pixels-v2'"),
-        ({"layers": 9}, "'layers' must be an int in 2 .. 8"),
-        ({"activation": "relu"}, "activation 'relu'"),
-        ({"format": "copi-capabilities"}, "not a copi policy file"),
-        ({"version": 99}, "written by a newer copi"),
-    ],
-)
-def test_bad_policy_files_are_refused_in_one_line(
-    change: dict, message: str, tmp_path: Path, capsys
-) -> None:
-    good = save_policy(_random_policy(), tmp_path / "good.npz")
-    bad = _tamper(good, tmp_path / "bad.npz", **change)
-    with pytest.raises(PolicyFormatError, match=message.replace("(", r"\(").replace(")", r"\)")):
-        load_policy(bad)
-    out = tmp_path / "r.sqlite"
-    args = ["evaluate", "--method", "ppo", "-o", str(out), "--worlds", "1"]
-    from copi.methods import register_method, unregister_method
-
-    register_method("ppo-test", PPOAgent, params={"weights": str(bad)}, replace=True)
-    try:
-        line = _one_line_error(*run([*args[:2], "ppo-test", *args[3:]], capsys)[::2])
-        assert message.split("(")[0][:30] in line, line
-    finally:
-        unregister_method("ppo-test")
-    assert not out.exists()
-
-
 @pytest.mark.parametrize(
     ("args", "message"),
     [
@@ -195,62 +140,3 @@ def test_bad_training_options_are_one_line(args: list[str], message: str, tmp_pa
     line = _one_line_error(*run(["rl", "train", "-o", str(out), *args], capsys)[::2])
     assert message in line, line
     assert list(tmp_path.iterdir()) == []
-
-
-def test_ppo_without_weights_is_left_out_or_refused(tmp_path: Path, capsys, monkeypatch) -> None:
-    import copi.baselines._ppo as ppo
-
-    monkeypatch.setattr(ppo, "POLICIES", tmp_path / "none")
-    out = tmp_path / "r.sqlite"
-    line = _one_line_error(*run(["evaluate", "--method", "ppo", "-o", str(out), "--worlds", "1"],
-                                capsys)[::2])  # fmt: skip
-    assert "ppo needs its trained weights ppo-mix.npz, which copi does not ship here" in line
-    assert not out.exists()
-
-
-def test_features_clip_and_normalise() -> None:
-    x = features(np.r_[np.full(31, 10.0), 0.0], np.r_[np.full(31, 0.0), 10.0], [1.0, 0.0],
-                 50.0, 10.0)  # fmt: skip
-    assert x[0] == 1.0 and x[31] == 0.0 and x[32] == 1.0 and x[63] == -1.0
-    assert x[64:].tolist() == [1.0, 0.0, 1.0]
-    # pointing down (-y: ray 24 of 32): ray 24 of the sensor is the block's first
-    r = np.arange(32.0) / 4
-    y = features(r, None, [0.0, -2.0], 5.0, 10.0)
-    assert direction_frame([0.0, -2.0], 32) == 24 and y[0] == r[24] / 10 and y[8] == r[0] / 10
-    assert np.allclose(y[64:], [1.0, 0.0, 0.5])
-
-
-@pytest.mark.parametrize("angle", [0.0, 0.3, 1.7, -2.9, 3.1])
-def test_the_frame_is_a_symmetry(angle: float) -> None:
-    """Turning the world by whole rays turns the observation not at all and the action
-    with it: the policy's frame is the direction's."""
-    rng = np.random.default_rng(0)
-    r, prev = rng.uniform(0, 10, 32), rng.uniform(0, 10, 32)
-    d = np.array([math.cos(angle), math.sin(angle)])
-    for j in (1, 5, 20):
-        turned = np.array([[math.cos(2 * math.pi * j / 32), -math.sin(2 * math.pi * j / 32)],
-                           [math.sin(2 * math.pi * j / 32), math.cos(2 * math.pi * j / 32)]])
-        a = features(r, prev, d, 3.0, 10.0)
-        b = features(np.roll(r, j), np.roll(prev, j), turned @ d, 3.0, 10.0)
-        np.testing.assert_allclose(a, b, atol=1e-9)
-        v = np.array([0.3, -0.4])
-        np.testing.assert_allclose(
-            turned @ to_world(v, direction_frame(d, 32), 32),
-            to_world(v, direction_frame(turned @ d, 32), 32), atol=1e-9)
-
-
-def test_every_shipped_policy_loads_and_says_how_it_was_trained() -> None:
-    """The weights copi ships (seed 0 for the benchmark, the other seeds for the spread)
-    pass the loader's checks, and each names the command that trained it, in the
-    repository's terms (no directory of the machine it ran on)."""
-    from copi.baselines._ppo import POLICIES, load_policy
-
-    files = sorted(POLICIES.glob("*.npz")) + sorted((POLICIES / "seeds").glob("*.npz"))
-    assert len(files) >= 7
-    for path in files:
-        command = load_policy(path).info.get("command", "")
-        assert command.startswith("copi rl train -o results/rl/ppo-"), (path.name, command)
-        assert " --steps 2000000 " in command and " --seed " in command
-        if path.parent.name == "seeds":
-            seed = path.stem.rsplit("-s", 1)[1]
-            assert command.endswith(f"--seed {seed}") and seed != "0"

@@ -6,7 +6,8 @@ model-predictive oracle beside every method, on the same episodes.
 
 Runs ``copi benchmark`` three times into one directory (resumable): every default method
 and ``clairvoyant`` on ``--episodes`` episodes per family, then ``model-oracle`` (1-3 s
-an episode), then the planners at level map (``tracked-mpc`` and ``copi-predictive``) on
+an episode), then the planners at level map (``tracked-mpc``, ``copi-predictive`` and its
+ablations) on
 the first ``--oracle-episodes``; the report pairs each row on the episodes both ran.
 Writes a summary: per family and level, the share solvable at all (the clairvoyant,
 the one bound), the reference planner (model-oracle: called a bound in a family only
@@ -64,7 +65,10 @@ def main() -> None:
     methods = [m for m in METHODS if method_spec(m).available()]
     # wall times of the runs that did the work (a rerun that only resumes keeps them)
     measured = {}
-    planners = ["tracked-mpc", "copi-predictive"]
+    # the planners at level map, copi-predictive's ablations among them (what the
+    # contexts and the safety network add, on the same episodes)
+    planners = ["tracked-mpc", "copi-predictive", "copi-predictive-contexts",
+                "copi-predictive-nonet"]
     for key, eps, ms in (("methods", a.episodes, methods),
                          ("oracle", a.oracle_episodes, ["model-oracle"]),
                          ("tracked", a.oracle_episodes, planners)):  # fmt: skip
@@ -83,7 +87,8 @@ def main() -> None:
         f"--oracle-episodes {a.oracle_episodes}` (benchmark seed 0; "
         f"{timing['methods']['seconds'] / 60:.0f} min for the methods and the clairvoyant, "
         f"{timing['oracle']['seconds'] / 60:.0f} min for the oracle, "
-        f"{timing['tracked']['seconds'] / 60:.0f} min for tracked-mpc and copi-predictive, "
+        f"{timing['tracked']['seconds'] / 60:.0f} min for the planners at level map (tracked-mpc, "
+        "copi-predictive and its two ablations), "
         f"{timing['oracle']['workers']} worker(s)). *clairvoyant* knows the obstacles' "
         "whole future (they ignore the agent, "
         "so it can be recorded) and replays its space-time plan through the simulator: the "

@@ -59,6 +59,11 @@ def test_quoted_paragraphs_are_the_sections_bold_ones(tmp_path: Path) -> None:
         assert f"**{family}**: " in text, family
     with pytest.raises(SystemExit, match="has no heading"):
         tool.quoted_paragraphs("ceilings.md#No such section")
+    # "| rows: A" keeps A's paragraph alone; a name with no paragraph is refused
+    crowd = tool.quoted_paragraphs("ceilings.md#How much of the gap copi closes | rows: crowd")
+    assert crowd.startswith("**crowd**: ") and "**star**" not in crowd
+    with pytest.raises(SystemExit, match="no paragraph opens with a bold name of"):
+        tool.quoted_paragraphs("ceilings.md#How much of the gap copi closes | rows: moon")
 
 
 def test_a_results_line_that_differs_from_its_source_fails(tmp_path: Path) -> None:

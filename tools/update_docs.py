@@ -8,7 +8,9 @@
   rows, each quoted whole from the generated results page it names (``RESULTS`` below);
 - between ``<!-- quote-text PAGE#SECTION -->`` and ``<!-- /quote-text -->``: the
   paragraphs under the heading ``SECTION`` of ``docs/PAGE`` that open with a bold name
-  (``**crowd**: ...``), quoted whole (the ceilings' family-by-family gaps);
+  (``**crowd**: ...``), quoted whole (the ceilings' family-by-family gaps, the
+  benchmark's words on its tables); ``| rows: A, B`` keeps the paragraphs whose bold
+  name is A or B;
 - between ``<!-- quote PAGE#SECTION -->`` and ``<!-- /quote -->`` (any page in ``PAGES``):
   the first table under the heading ``SECTION`` of the generated page ``docs/PAGE``
   (``PAGE#SECTION#N``: its N-th table, from 1), quoted whole; ``| rows: A, B`` after the
@@ -129,7 +131,9 @@ def quoted_table(spec: str) -> str:
 
 
 def quoted_paragraphs(spec: str) -> str:
-    """The paragraphs ``PAGE#SECTION`` names that open with a bold name (see the module)."""
+    """The paragraphs ``PAGE#SECTION`` names that open with a bold name (see the module);
+    ``PAGE#SECTION | rows: A, B`` keeps those whose bold name is A or B."""
+    spec, _, rows = spec.partition("|")
     page, _, section = spec.strip().partition("#")
     path = ROOT / "docs" / page
     if not path.is_file():
@@ -143,8 +147,12 @@ def quoted_paragraphs(spec: str) -> str:
                len(lines))  # fmt: skip
     body = "\n".join(lines[start + 1 : end])
     kept = [p.strip() for p in body.split("\n\n") if p.strip().startswith("**")]
+    if rows.strip():
+        keep = {r.strip() for r in rows.strip().removeprefix("rows:").split(",")}
+        kept = [p for p in kept if p[2:].partition("**")[0] in keep]
     if not kept:
-        raise SystemExit(f"quote-text {spec!r}: no paragraph opens with a bold name")
+        raise SystemExit(f"quote-text {spec!r}: no paragraph opens with a bold name"
+                         + (f" of {sorted(keep)}" if rows.strip() else ""))
     return "\n\n".join(kept) + "\n"
 
 

@@ -183,6 +183,16 @@ def test_benchmark_without_navground(
     # no copi-learnt here: the reference is the first method run, and the report says so
     assert "**Reference: straight** (the first method of the run" in out
     assert "| **straight** | map | route | 2 |" in out and "| dwa | map | route | 2 |" in out
+    # --against names a method of this run or one the store already holds; any other is
+    # refused before anything runs
+    more = ["benchmark", "-o", str(tmp_path / "c"), "--families", "star", "--episodes", "2",
+            "--workers", "1"]  # fmt: skip
+    code, out, err = run([*more, "--methods", "compass-guard@map", "--against", "dwa"], capsys)
+    assert code == 0, err
+    assert "**Reference: dwa** (named with --against)" in out
+    code, _, err = run([*more, "--methods", "vfh@map", "--against", "tangent-bug"], capsys)
+    assert code == 2 and "--against tangent-bug: it is not among the methods run (vfh) nor " \
+        "among those the store holds" in err, err  # fmt: skip
 
 
 def test_a_mapping_run_is_its_own_run(tmp_path: Path) -> None:

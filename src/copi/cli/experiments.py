@@ -55,6 +55,21 @@ def _load_capabilities(path: Path | None):  # type: ignore[no-untyped-def]
     return Capabilities.load(path)
 
 
+def _stored_methods(store: Path) -> set[str]:
+    """The methods a benchmark store already holds rows of (none when there is no store, or
+    it cannot be read: the run itself then says what is wrong with it)."""
+    import sqlite3
+    from contextlib import closing
+
+    if not store.is_file():
+        return set()
+    try:
+        with closing(sqlite3.connect(f"file:{store}?mode=ro", uri=True)) as db:
+            return {m for (m,) in db.execute("SELECT DISTINCT method FROM episodes")}
+    except sqlite3.Error:
+        return set()
+
+
 def _warn_if_mapping_closes(world_file: Path, sensor_strategy: str) -> None:
     """Warn of the worlds whose every way the mapping strategy's grid may close."""
     if sensor_strategy != "mapping":
@@ -231,9 +246,11 @@ def benchmark_command(
                             f"level with the reference's row at the same level); got "
                             f"{against!r}: try --against {name}")  # fmt: skip
         method_spec(against)
-        if against not in {r.method for r in chosen}:
+        stored = _stored_methods(output / "benchmark.sqlite")
+        if against not in {r.method for r in chosen} | stored:
             raise CopiError(f"--against {against}: it is not among the methods run "
-                            f"({', '.join(dict.fromkeys(r.method for r in chosen))})")  # fmt: skip
+                            f"({', '.join(dict.fromkeys(r.method for r in chosen))})"
+                            + (" nor among those the store holds" if stored else ""))  # fmt: skip
     own = [s.episodes for f in fams if (s := family_spec(f).episode) is not None and s.episodes]
     n = episodes if episodes is not None else (30 if quick else min([1000, *own]))
     check_outputs(

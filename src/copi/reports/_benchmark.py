@@ -146,8 +146,9 @@ def _said(
 ) -> list[str]:
     """What the tables say, in words, read from their data (never typed): per family,
     the row with the most successes, and the rows with more or fewer successes than the
-    reference at their level, the paired interval excluding zero (the analysis pages
-    quote this section instead of comparing by hand)."""
+    reference at their level, the paired interval excluding zero; then, method by
+    method, the families where it has more, fewer or as many successes as the reference
+    (the analysis pages quote these sections instead of comparing by hand)."""
     out = ["### What the tables say", ""]
     for family in families:
         rows = table[family]
@@ -165,6 +166,28 @@ def _said(
             f"{'; '.join(more) or 'none'}; fewer: {'; '.join(fewer) or 'none'}.",
             "",
         ]
+    out += ["### Method by method", ""]
+    for arm in sorted({a for f in families for a, pr in diffs[f].items() if pr is not None},
+                      key=lambda a: (a.method, SENSING_LEVELS.index(a.sensing), a.strategy)):
+        more, fewer, level, thin = [], [], [], []
+        for family in families:
+            pair = diffs[family].get(arm)
+            if pair is None:
+                continue
+            d = pair[0]
+            if d.n < MIN_PAIRS:
+                thin.append(_family_title(family))
+            elif not d.excludes_zero:
+                level.append(_family_title(family))
+            else:
+                (more if d.estimate > 0 else fewer).append(
+                    f"{_family_title(family)} ({format_difference(d)})")
+        parts = [f"more successes than {reference} in {'; '.join(more) or 'no family'}",
+                 f"fewer in {'; '.join(fewer) or 'no family'}",
+                 f"level (the interval holds zero) in {', '.join(level) or 'no family'}"]
+        if thin:
+            parts.append(f"too few paired episodes in {', '.join(thin)}")
+        out += [f"**{arm.method}** at {arm.sensing} ({arm.strategy}): {'; '.join(parts)}.", ""]
     return out
 
 

@@ -22,6 +22,9 @@ def caps(learnt_caps: Path, tmp_path_factory: pytest.TempPathFactory) -> dict[st
         "extended": LearnParams(worlds=6, steps=150, directions=16, seed=1),
         "learnt-motion": LearnParams(worlds=6, steps=150, directions=16, safety=True,
                                      motion=True, probe_worlds=6, probe_steps=60, seed=1),
+        "predictive": LearnParams(worlds=6, steps=150, directions=16, safety=True,
+                                  safety_static=True, predict=True, probe_worlds=6,
+                                  probe_steps=60, predict_worlds=4, predict_steps=60, seed=1),
     }  # fmt: skip
     out: dict[str, Any] = {name: learn(p) for name, p in small.items()}
     out["learnt"] = Capabilities.load(learnt_caps)

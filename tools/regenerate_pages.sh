@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Every generated results page of docs/, rerun from nothing (about 90 min on 2 cores):
+# Every generated results page of docs/, rerun from nothing (about 3 hours on 2 cores):
 #
 #     bash tools/regenerate_pages.sh [results-dir]
 #
@@ -35,6 +35,15 @@ $BIN/python studies/rl_experiments.py --bench "$R/ceilings" --episodes 200 --gam
 $BIN/python studies/rl_experiments.py --bench "$R/rl-bench" --episodes 200 --games 200
 
 t=$(date +%s)
+D="copi-predictive,tracked-mpc,compass-guard@map,copi-learnt@map,dwa@map"
+W=src/copi/data/worlds/dense-crowds.json
+$BIN/copi benchmark -o "$R/bench-dense-crowds" --world-file $W --episodes 120 --workers 2 \
+    --methods "$D" --against compass-guard
+$BIN/python tools/benchmark_page.py "$R/bench-dense-crowds" docs/benchmark-dense-crowds.md \
+    --what "crowd worlds no method was tuned on (the six dense-crowds worlds, 120 episodes)" \
+    --command "\`copi benchmark -o results/bench-dense-crowds --world-file $W --episodes 120 --workers 2 --methods $D --against compass-guard\` (seed 0; $(took "$t") on 2 cores)"
+
+t=$(date +%s)
 $BIN/copi benchmark -o "$R/bench-ablations" --episodes 500 --workers 2 --methods ablations
 $BIN/python tools/benchmark_page.py "$R/bench-ablations" docs/benchmark-ablations.md \
     --what "the learnt preset's ablations, 500 episodes" \
@@ -48,6 +57,8 @@ $BIN/copi benchmark -o "$R/bench-mapping" --episodes 200 --methods "$M"
 $BIN/python tools/benchmark_page.py "$R/bench-mapping" docs/benchmark-mapping.md \
     --what "200 episodes at level sensor, heading for the goal and with a map built on the fly" \
     --command "\`copi benchmark -o results/bench-mapping --episodes 200 --methods $M\` (seed 0; $(took "$t") on 2 cores)"
+
+$BIN/python studies/crowdnav.py --bench "$R/crowdnav" --episodes 500 --out docs/crowdnav.md
 
 $BIN/python studies/landmarks.py --seeds 10 --workers 2 --out docs/landmarks.md
 $BIN/python studies/landmarks_effect.py --episodes 200 --seeds 0,1,2,3,4 \

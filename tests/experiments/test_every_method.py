@@ -23,7 +23,11 @@ def presets(tmp_path_factory: pytest.TempPathFactory, learnt_caps: Path,
     for name, params in (("extended", LearnParams(worlds=6, steps=150, directions=16, seed=1)),
                          ("learnt-motion", LearnParams(worlds=4, steps=100, directions=16,
                                                        safety=True, motion=True, probe_worlds=4,
-                                                       probe_steps=40, seed=1))):  # fmt: skip
+                                                       probe_steps=40, seed=1)),
+                         ("predictive", LearnParams(worlds=4, steps=100, directions=16,
+                                                    safety=True, safety_static=True,
+                                                    predict=True, probe_worlds=4, probe_steps=40,
+                                                    predict_worlds=4, predict_steps=60, seed=1))):  # fmt: skip
         learn(params).save(d / f"{name}.npz")
         out[name] = str(d / f"{name}.npz")
     return out

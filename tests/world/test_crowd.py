@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 from copi.errors import InvalidArgumentError
@@ -54,7 +54,11 @@ def _check_scans(crowd: Crowd) -> None:
 def test_batched_scans_are_range_sensor_scans_bit_for_bit(
     agents: int, density: float, seed: int, moves: int, cell: float | None
 ) -> None:
-    crowd = Crowd.draw(crowd_room(agents, density), agents, seed, cell_size=cell)
+    try:
+        crowd = Crowd.draw(crowd_room(agents, density), agents, seed, cell_size=cell)
+    except InvalidArgumentError as e:  # a room of a few agents at density 1 is mostly wall band
+        assert "lower the density" in str(e) and agents < 10
+        assume(False)
     _check_scans(crowd)
     rng = np.random.default_rng(seed)
     for _ in range(moves):  # agents that touch or arrive leave; some overlap on the way

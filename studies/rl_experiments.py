@@ -579,8 +579,9 @@ def write_bounds_page(bench: Path, a: argparse.Namespace, page: Path, n_oracle: 
         f"{a.bench} --episodes {a.episodes} --games {a.games}` (seed 0; model-oracle on the "
         f"first {n_oracle} episodes)"
     )
-    return write_page(bench, page, f"{a.episodes} episodes, with the bounds and the RL peers",
-                      command)  # fmt: skip
+    what = (f"{a.episodes} episodes, with the clairvoyant bound, the reference planners and "
+            "the RL peers")
+    return write_page(bench, page, what, command)
 
 
 if __name__ == "__main__":

@@ -21,13 +21,16 @@ ROOT = Path(__file__).resolve().parents[1]
 FIGURE = "benchmark_success_excess.png"
 
 
-def write_page(store: Path, page: Path, what: str, command: str) -> Path:
-    """``store``'s benchmark report as ``page`` (see the module)."""
+def write_page(store: Path, page: Path, what: str, command: str,
+               against: str | None = None) -> Path:
+    """``store``'s benchmark report as ``page`` (see the module), each row paired with
+    ``against`` (copi benchmark's default when None)."""
     sys.path.insert(0, str(ROOT / "src"))
     from copi.reports import write_benchmark_report
 
     with tempfile.TemporaryDirectory() as tmp:
-        text = write_benchmark_report(store / "benchmark.sqlite", tmp).read_text()
+        text = write_benchmark_report(store / "benchmark.sqlite", tmp,
+                                      against=against).read_text()
         shutil.copyfile(Path(tmp) / FIGURE, page.with_suffix(".png"))
     title, _, body = text.partition("\n")
     text = f"{title} ({what})\n\n<!-- generated: {command} -->\n" + body
@@ -41,10 +44,11 @@ def main() -> None:
     ap.add_argument("page", type=Path, help="the docs page to write")
     ap.add_argument("--what", required=True, help="what the run is (the title's end)")
     ap.add_argument("--command", required=True, help="the command(s) that made the store")
+    ap.add_argument("--against", help="the method each row is paired with (as copi benchmark)")
     a = ap.parse_args()
     if not (a.store / "benchmark.sqlite").is_file():
         raise SystemExit(f"{a.store}: no benchmark.sqlite (run copi benchmark -o {a.store})")
-    print(f"wrote {write_page(a.store, a.page, a.what, a.command)}")
+    print(f"wrote {write_page(a.store, a.page, a.what, a.command, a.against)}")
 
 
 if __name__ == "__main__":

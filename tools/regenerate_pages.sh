@@ -40,7 +40,7 @@ W=src/copi/data/worlds/dense-crowds.json
 $BIN/copi benchmark -o "$R/bench-dense-crowds" --world-file $W --episodes 120 --workers 2 \
     --methods "$D" --against compass-guard
 $BIN/python tools/benchmark_page.py "$R/bench-dense-crowds" docs/benchmark-dense-crowds.md \
-    --what "crowd worlds no method was tuned on (the six dense-crowds worlds, 120 episodes)" \
+    --what "crowd worlds no method was tuned on (the six dense-crowds worlds, 120 episodes)" --against compass-guard \
     --command "\`copi benchmark -o results/bench-dense-crowds --world-file $W --episodes 120 --workers 2 --methods $D --against compass-guard\` (seed 0; $(took "$t") on 2 cores)"
 
 t=$(date +%s)

@@ -29,26 +29,29 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
 
-RESULTS: list[tuple[str, str, str]] = [
+RESULTS: list[tuple[str, str, str, str]] = [
     ("ceilings.md", "| crowd |",
      "**What is possible.** Every episode of every family is solvable by a clairvoyant; in "
-     "crowds no method comes near it, and copi's learnt part does not yet beat the "
-     "hand-written guard"),
-    ("benchmark-bounds.md#crowd", "| compass-guard | map |",
-     "**Where copi loses.** compass-guard — copi's hand-written guard with nothing learnt, "
-     "its guard tuned on its own — has more successes than copi-learnt (the reference of "
-     "Δ) in crowds at level map"),
+     "crowds no method comes near it, and the best of them are planners over the discs' "
+     "futures (copi-predictive's learnt model among them)", ""),
+    ("benchmark-bounds.md#crowd", "| tracked-mpc | map |",
+     "**Where copi-learnt loses.** tracked-mpc — the reference planner's hand-written "
+     "planning over the discs it makes out in its reading, at the same level — has more "
+     "successes than copi-learnt (the reference of Δ) in crowds",
+     "more successes"),
     ("rl.md", "| indoor | map |",
      "**Against deep RL.** PPO trained in the family it is tested on (2M steps), beside "
      "copi-learnt (learnt once, without any task); this PPO learnt little beyond following "
-     "the global direction (its last column: against `straight`)"),
+     "the global direction (its last column: against `straight`)", ""),
     ("rl.md#A new task", "| ppo-chauffeur",
      "**A new task**, the homicidal chauffeur's evader: copi-learnt's capabilities "
      "unchanged (its hand-written guard included), against PPO trained for the game with "
-     "the same step budget (a peer that learnt little: see below)"),
+     "the same step budget (a peer that learnt little: see below)", ""),
 ]
-"""(source page, the row's first cell, what the line says of it): each headline is the
-row of a generated table whose first cells match, quoted whole."""
+"""(source page, the row's first cells, what the line says of it, a phrase the row must
+hold for the line to be true): each headline is the row of a generated table whose first
+cells match, quoted whole; a row that no longer holds its phrase stops the tool, so that
+no headline outlives the numbers it speaks of."""
 
 
 def _block(text: str, tag: str, body: str) -> str:
@@ -83,9 +86,13 @@ def quoted_row(page: str, first: str) -> str:
 
 def results_block() -> str:
     out = []
-    for page, first, label in RESULTS:
+    for page, first, label, holds in RESULTS:
         file = page.partition("#")[0]
-        out.append(f"{label} ([docs/{file}](docs/{file})):\n\n{quoted_row(page, first)}\n")
+        row = quoted_row(page, first)
+        if holds not in row.splitlines()[-1]:
+            raise SystemExit(f"README headline {label[:40]!r}...: docs/{page}'s row "
+                             f"{first!r} no longer says {holds!r}; reword the headline")
+        out.append(f"{label} ([docs/{file}](docs/{file})):\n\n{row}\n")
     return "\n".join(out)
 
 
@@ -169,7 +176,8 @@ def _quotes(text: str) -> str:
 
 
 PAGES = ("README.md", "docs/concepts/pipeline.md", "docs/analysis/benchmark.md",
-         "docs/analysis/experiments.md", "docs/speed.md", "docs/concepts/learning.md")  # fmt: skip
+         "docs/analysis/experiments.md", "docs/speed.md", "docs/concepts/learning.md",
+         "docs/predictive.md")  # fmt: skip
 """The pages with generated blocks."""
 
 

@@ -389,6 +389,8 @@ def write_benchmark_report(
             )  # fmt: skip
     if len(families) > 1:
         lines += _overview(families, table, diffs, reference, known)
+    else:  # one family: its table is the overview; what it says, in words, still
+        lines += ["## Overview", "", *_said(families, table, diffs, reference)]
     for family in families:
         g = groups[family]
         arms = list(table[family])

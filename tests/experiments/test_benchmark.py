@@ -288,3 +288,10 @@ def test_the_report_table_is_the_store(tmp_path: Path) -> None:
             assert f"{round(100 * d.estimate, 1) + 0.0:+.1f} [" in line
         checked += 1
     assert checked == 3, text
+    # one family: its words are there too (a world file's page quotes them), and a
+    # report paired with another method speaks of that method
+    words = text.split("### Method by method")[1].split("\n## ")[0]
+    assert "**compass-guard** at map (route): " in words and "**dwa** at map" in words
+    other = write_benchmark_report(tmp_path / "b.sqlite", tmp_path / "rep2",
+                                   against="dwa").read_text()  # fmt: skip
+    assert "**compass-guard** at map (route): more successes than dwa in " in other

@@ -254,6 +254,32 @@ def learn_motion(
     return MotionModel(turn, speed, start, radius, stats).check()
 
 
+@njit(cache=True, nogil=True)
+def _draw(cdf):  # type: ignore[no-untyped-def]
+    """A bin drawn from the cumulative law ``cdf`` (one uniform draw)."""
+    u = np.random.random()
+    b = 0
+    while b < cdf.shape[0] - 1 and cdf[b] < u:
+        b += 1
+    return b
+
+
+@njit(cache=True, nogil=True)
+def _edge_bin(edges, v):  # type: ignore[no-untyped-def]
+    """The bin of ``edges`` holding ``v`` (the first below its lower edge, the last
+    above its upper one)."""
+    a = 0
+    while a < edges.shape[0] - 2 and v >= edges[a + 1]:
+        a += 1
+    return a
+
+
+@njit(cache=True, nogil=True)
+def _speed_in(speed_edges, b):  # type: ignore[no-untyped-def]
+    """A speed uniform in bin ``b`` of ``speed_edges`` (one uniform draw)."""
+    return speed_edges[b] + np.random.random() * (speed_edges[b + 1] - speed_edges[b])
+
+
 @njit(cache=True, nogil=True)  # nogil: many agents draw at once in threads
 def sample_motion(  # type: ignore[no-untyped-def]
     bodies, segs, n_samples, horizon, seed, turn_cdf, speed_cdf, start_cdf, ahead_edges,
@@ -272,8 +298,6 @@ def sample_motion(  # type: ignore[no-untyped-def]
     np.random.seed(seed)
     d = bodies.shape[0]
     n_turn = turn_cdf.shape[1]
-    n_speed = speed_cdf.shape[1]
-    n_ahead = ahead_edges.shape[0] - 1
     cny, cnx = clear.shape
     slack = ch * 0.7072
     out = np.empty((n_samples, horizon + 1, d, 2))
@@ -292,11 +316,7 @@ def sample_motion(  # type: ignore[no-untyped-def]
                 v = bodies[k, 4]
             else:
                 h = 2.0 * math.pi * np.random.random()
-                u = np.random.random()
-                b = 0
-                while b < n_speed - 1 and start_cdf[b] < u:
-                    b += 1
-                v = speed_edges[b] + np.random.random() * (speed_edges[b + 1] - speed_edges[b])
+                v = _speed_in(speed_edges, _draw(start_cdf))
             out[s, 0, k, 0] = x
             out[s, 0, k, 1] = y
             for t in range(horizon):
@@ -305,23 +325,10 @@ def sample_motion(  # type: ignore[no-untyped-def]
                 room = 1e3
                 if not (0 <= ci < cny and 0 <= cj < cnx and clear[ci, cj] - slack > 4.0 + rk):
                     room = sweep_one(x, y, math.cos(h), math.sin(h), local, rk)
-                a = 0
-                while a < n_ahead - 1 and room >= ahead_edges[a + 1]:
-                    a += 1
-                u = np.random.random()
-                b = 0
-                while b < n_turn - 1 and turn_cdf[a, b] < u:
-                    b += 1
+                b = _draw(turn_cdf[_edge_bin(ahead_edges, room)])
                 h += -math.pi + (b + np.random.random()) * width
                 if speed_cdf.shape[0] > 1:  # a speed drawn after the last (else: kept)
-                    sb = 0
-                    while sb < n_speed - 1 and v >= speed_edges[sb + 1]:
-                        sb += 1
-                    u = np.random.random()
-                    b = 0
-                    while b < n_speed - 1 and speed_cdf[sb, b] < u:
-                        b += 1
-                    v = speed_edges[b] + np.random.random() * (speed_edges[b + 1] - speed_edges[b])
+                    v = _speed_in(speed_edges, _draw(speed_cdf[_edge_bin(speed_edges, v)]))
                 dx = math.cos(h)
                 dy = math.sin(h)
                 go = sweep_one(x, y, dx, dy, local, rk)

@@ -68,10 +68,9 @@ def _beside_published(arms: dict) -> list[str]:
     if not arms:
         return []
 
-    def won(arm) -> dict[int, bool]:  # type: ignore[no-untyped-def]
-        return {r.episode: r.outcome == "success" for r in arms[arm] if r.outcome != "skipped"}
-
-    rates = {arm: sum(won(arm).values()) / len(won(arm)) for arm in arms}
+    won = {arm: {r.episode: r.outcome == "success" for r in rows if r.outcome != "skipped"}
+           for arm, rows in arms.items()}  # fmt: skip
+    rates = {arm: sum(w.values()) / len(w) for arm, w in won.items()}
     out = ["## Beside the published numbers (circle crossing)", ""]
     orca = next((a for a in arms if a.method == "crowdnav-orca"), None)
     published = PUBLISHED[1][1]
@@ -89,9 +88,9 @@ def _beside_published(arms: dict) -> list[str]:
         for other in sorted(arms, key=lambda a: -rates[a]):
             if other == best or other.method in ("clairvoyant",) or rates[other] < 0.5:
                 continue
-            common = sorted(set(won(best)) & set(won(other)))
-            d = paired_difference([won(best)[k] for k in common],
-                                  [won(other)[k] for k in common])  # fmt: skip
+            common = sorted(set(won[best]) & set(won[other]))
+            d = paired_difference([won[best][k] for k in common],
+                                  [won[other][k] for k in common])  # fmt: skip
             pairs.append(f"{other.method} at {other.sensing} {100 * rates[other]:.1f} % "
                          f"({100 * d.estimate:+.1f} [{100 * d.low:+.1f}, {100 * d.high:+.1f}])")
         out += [f"**The best copi method**, {best.method} at {best.sensing}, succeeds in "

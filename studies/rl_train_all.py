@@ -1,13 +1,20 @@
 """Train every PPO policy copi reports, two at a time (one per core), resumably.
 
     python studies/rl_train_all.py --steps 2000000 --seeds 0 --out results/rl --install
+    python studies/rl_train_all.py --peer first --steps 2000000 --seeds 0 --install
 
-Configurations: ``mix`` (all five families), one per family (in-family), and
-``chauffeur`` (the game's evader), each over the seeds given, with the settings chosen on
-validation episodes (``--tune`` runs that choice: five settings on the mix, one seed).
+Two peers. The second (the default, ``--peer second``): one policy per family at level
+``map``, seeing what that level gives (``copi-local-v3``: the hits the static map does
+not explain, three readings stacked, its own velocity) with ``copi rl train``'s defaults,
+the setting chosen by ``--tune`` (the settings of :data:`TUNING_SECOND` on star at map,
+400k steps, validation seed 1). The first (``--peer first``): ``copi-local-v2`` (the
+ranges and their change, the same at every level) on a mix of sensor and map episodes;
+configurations ``mix`` (all five families), one per family and ``chauffeur`` (the game's
+evader), with :data:`TUNING`'s ``lr1e-3``.
+
 Each run is ``copi rl train`` with checkpoints, so an interrupted script resumes. The
 seed-0 policies are then copied into ``src/copi/data/rl`` by ``--install``, the other
-seeds' in-family ones into ``src/copi/data/rl/seeds``.
+seeds' into ``src/copi/data/rl/seeds``.
 """
 
 from __future__ import annotations
@@ -37,6 +44,27 @@ TUNING = {
 """The settings tried on the mix (``--tune``; every learning curve is success on fixed
 episodes of validation seed 1): SB3's default exploration noise (noisy, log std 0), less
 (base, -1; calm, -2), and with base's noise a larger learning rate or wider layers."""
+FIRST = ["--observation", "copi-local-v2", "--levels", "sensor,map", "--frames", "2",
+         "--proximity", "0", "--ent", "0", "--net", "64,64", "--n-steps", "256",
+         "--batch-size", "256"]
+"""The first peer's settings apart from :data:`TUNING`'s (its defaults when it was
+trained)."""
+SECOND = {f"{f}-map": ["--families", f, "--levels", "map"] for f in FAMILIES}
+TUNING_SECOND = {
+    "default": [],
+    "no-proximity": ["--proximity", "0"],
+    "frames-2": ["--frames", "2"],
+    "frames-5": ["--frames", "5"],
+    "contact-30": ["--contact", "30"],
+    "wide": ["--net", "256,256"],
+    "first-peer": ["--lr", "1e-3", "--log-std", "-1", "--ent", "0", "--net", "64,64",
+                   "--n-steps", "256", "--batch-size", "256", "--proximity", "0"],
+}
+"""The settings tried for the second peer on star at map (``--tune``): copi rl train's
+defaults (lr 3e-4, 8 envs x 512 steps, batches of 512, entropy 0.005, log std -0.5,
+128-128 tanh layers, 3 readings, proximity penalty 0.5, contact 10), then one change
+each: no proximity penalty, 2 or 5 readings, a contact cost of 30, wider layers, and
+the first peer's optimiser settings."""
 SHIPPED = Path(__file__).resolve().parents[1] / "src" / "copi" / "data" / "rl"
 DOCS = Path(__file__).resolve().parents[1] / "docs"
 
@@ -62,7 +90,8 @@ def main() -> None:
     ap.add_argument("--seeds", default="0,1,2")
     ap.add_argument("--out", default="results/rl")
     ap.add_argument("--only", default=None, help="comma-separated configurations")
-    ap.add_argument("--tune", action="store_true", help="the settings on the mix, seed 0")
+    ap.add_argument("--tune", action="store_true", help="the settings (seed 0)")
+    ap.add_argument("--peer", choices=("first", "second"), default="second")
     # chosen by --tune (400k steps on the mix, validation seed 1: the highest mean of the
     # last three points of the learning curve; docs/rl.md has the table)
     ap.add_argument("--setting", default="lr1e-3", help="the setting of every run")
@@ -71,14 +100,26 @@ def main() -> None:
     a = ap.parse_args()
     out = Path(a.out)
     jobs: list[tuple[str, list[str]]] = []
-    if a.tune:
-        jobs = [(f"tune-{k}", [*CONFIGS["mix"], *v, "--seed", "0"]) for k, v in TUNING.items()]
+    second = a.peer == "second"
+    if a.tune and second:
+        jobs = [(f"tune2-{k}", [*SECOND["star-map"], *v, "--seed", "0",
+                                "--validation-episodes", "100"])
+                for k, v in TUNING_SECOND.items()
+                if not a.only or k in a.only.split(",")]  # fmt: skip
+    elif a.tune:
+        jobs = [(f"tune-{k}", [*CONFIGS["mix"], *FIRST, *v, "--seed", "0"])
+                for k, v in TUNING.items()]  # fmt: skip
+    elif second:
+        names = a.only.split(",") if a.only else list(SECOND)
+        jobs = [(f"ppo-{name}-s{seed}", [*SECOND[name], "--seed", seed])
+                for seed in a.seeds.split(",") for name in names]  # fmt: skip
     else:
         names = a.only.split(",") if a.only else list(CONFIGS)
         for seed in a.seeds.split(","):
             for name in names:
                 jobs.append((f"ppo-{name}-s{seed}",
-                             [*CONFIGS[name], *TUNING[a.setting], "--seed", seed]))  # fmt: skip
+                             [*CONFIGS[name], *FIRST, *TUNING[a.setting], "--seed",
+                              seed]))  # fmt: skip
     with ThreadPoolExecutor(a.parallel) as pool:
         results = dict(zip([n for n, _ in jobs],
                            pool.map(lambda j: _run(j[0], j[1], out, a.steps), jobs),
@@ -88,17 +129,17 @@ def main() -> None:
         print(f"{name}: {r['steps']:,} steps, {r['seconds']:.0f} s ({r['steps_per_second']:,.0f}"
               f"/s), validation success {100 * last['success']:.1f} %")
     if a.install:
-        _install(out)
+        _install(out, list(SECOND) if second else list(CONFIGS))
 
 
-def _install(out: Path) -> None:
+def _install(out: Path, configs: list[str]) -> None:
     """Ship the seed-0 policies, their commands told as run from the repository with
     ``--out results/rl`` (the directory of this machine's run is nobody else's)."""
     from copi.baselines import load_policy, save_policy
 
     SHIPPED.mkdir(parents=True, exist_ok=True)
     prefix = str(out).rstrip("/") + "/"
-    for name in CONFIGS:
+    for name in configs:
         src = out / f"ppo-{name}-s0.npz"
         if not src.is_file():
             continue
@@ -113,7 +154,7 @@ def _install(out: Path) -> None:
     (SHIPPED / "seeds").mkdir(exist_ok=True)
     for src in sorted(out.glob("ppo-*-s*.npz")):
         name, seed = src.stem.removeprefix("ppo-").rsplit("-s", 1)
-        if seed == "0" or name not in CONFIGS or not (out / f"{src.stem}.json").is_file():
+        if seed == "0" or name not in configs or not (out / f"{src.stem}.json").is_file():
             continue
         policy = load_policy(src)
         policy.info["command"] = policy.info.get("command", "").replace(prefix, "results/rl/")

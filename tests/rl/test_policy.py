@@ -207,3 +207,109 @@ def test_every_shipped_policy_loads_and_says_how_it_was_trained() -> None:
         if path.parent.name == "seeds":
             seed = path.stem.rsplit("-s", 1)[1]
             assert command.endswith(f"--seed {seed}") and seed != "0"
+
+
+def _random_v3(level: str, frames: int, seed: int = 0) -> PolicyWeights:
+    from copi.baselines._ppo import OBSERVATION_V3, observation_size
+
+    rng = np.random.default_rng(seed)
+    sizes = [observation_size(32, OBSERVATION_V3, level, frames), 16, 2]
+    layers = tuple((rng.normal(0, 0.5, (b, a)), rng.normal(0, 0.1, b))
+                   for a, b in zip(sizes, sizes[1:], strict=False))  # fmt: skip
+    return PolicyWeights(layers, observation=OBSERVATION_V3, level=level, frames=frames)
+
+
+def test_v3_features_are_the_level_s_reading_stacked_in_the_direction_s_frame() -> None:
+    """Worked out block by block: the reading, the hits the static reading does not
+    explain (map only), each step's change (zeros before the episode's first reading),
+    the agent's velocity, the direction and the reach, all turned by the frame's k rays."""
+    from copi.baselines import features_v3
+
+    rng = np.random.default_rng(3)
+    r, h1 = rng.uniform(0.5, 10, 32), rng.uniform(0.5, 10, 32)
+    static = r + np.where(rng.random(32) < 0.3, rng.uniform(0, 4, 32), 0.0)
+    d = np.array([math.cos(1.0), math.sin(1.0)])  # 1 rad: k = round(32 / 2pi) = 5 rays
+    k = direction_frame(d, 32)
+    assert k == 5
+    v = np.array([0.0, -0.5])
+    x = features_v3(r, [h1], static, v, d, 30.0, 10.0, 4)
+    assert x.shape == (32 * 5 + 5,)  # reading, unexplained, 3 changes, then 5
+    np.testing.assert_allclose(x[:32], np.roll(r, -k) / 10)
+    np.testing.assert_allclose(x[32:64], np.roll(static - r, -k) / 10, atol=1e-12)
+    np.testing.assert_allclose(x[64:96], np.roll(np.clip(r - h1, -1.5, 1.5) / 1.5, -k))
+    np.testing.assert_array_equal(x[96:160], 0.0)  # readings before the first: no change
+    np.testing.assert_allclose(to_world(x[160:162], k, 32), v, atol=1e-12)
+    np.testing.assert_allclose(to_world(x[162:164], k, 32), d, atol=1e-12)
+    assert x[164] == 1.0  # the reach, clipped to the range
+    at_sensor = features_v3(r, [h1], None, v, d, 30.0, 10.0, 4)
+    np.testing.assert_allclose(at_sensor, np.r_[x[:32], x[64:]])  # no unexplained block
+
+
+@pytest.mark.parametrize("j", [1, 7, 20])
+def test_the_v3_frame_is_a_symmetry(j: int) -> None:
+    """Turning the world, its readings, velocity and direction by j whole rays leaves
+    the v3 observation as it was."""
+    from copi.baselines import features_v3
+
+    rng = np.random.default_rng(j)
+    r, h1, h2 = (rng.uniform(0.5, 10, 32) for _ in range(3))
+    static = r + rng.uniform(0, 2, 32)
+    a = 2 * math.pi * j / 32
+    turn = np.array([[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]])
+    d, v = np.array([0.6, -0.8]), np.array([0.3, 0.1])
+    x = features_v3(r, [h1, h2], static, v, d, 3.0, 10.0, 3)
+    y = features_v3(np.roll(r, j), [np.roll(h1, j), np.roll(h2, j)], np.roll(static, j),
+                    turn @ v, turn @ d, 3.0, 10.0, 3)  # fmt: skip
+    np.testing.assert_allclose(x, y, atol=1e-9)
+
+
+def test_a_v3_agent_runs_at_its_level_and_remembers_what_it_saw() -> None:
+    """A map policy is a map method (refused at sensor, naming its level); each step it
+    sees its earlier readings and the velocity it chose last, as the training env
+    shows them."""
+    from copi.baselines import features_v3
+    from copi.runs import Episode
+
+    policy = _random_v3("map", 3, seed=4)
+    agent = PPOAgent(policy=policy)
+    assert agent.sensing == "map"
+    episode = Episode.draw("star", 0, 1)
+    with pytest.raises(ValueError, match="map"):
+        episode.run(agent, sensing="sensor")
+    agent.reset(Task("map", 0.3, 0.5, 32, 10.0))
+    rng = np.random.default_rng(6)
+    seen: list[np.ndarray] = []
+    last = np.zeros(2)
+    goal = np.array([4.0, 3.0])
+    for _ in range(4):
+        r = rng.uniform(0.5, 10, 32)
+        static = r + 1.0
+        v = agent.act(Observation(ranges=r, goal=goal, position=np.zeros(2), static=static))
+        x = features_v3(r, seen, static, last, goal, math.hypot(*goal), 10.0, 3)
+        want = to_world(_forward(policy.layers, x), direction_frame(goal, 32), 32)
+        np.testing.assert_allclose(v, want, atol=1e-12)
+        seen, last = [r, *seen][:2], v
+    out = episode.run(PPOAgent(policy=policy), sensing="map")
+    assert out.steps >= 1
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"frames": 99}, "'frames' must be an int in 2 .. 16"),
+        ({"level": "oracle"}, "'level' must be sensor or map"),
+        ({"level": "sensor"}, "layer 0 takes 133 inputs; expected the observation's 101"),
+        ({"frames": 4}, "layer 0 takes 133 inputs; expected the observation's 165"),
+    ],
+)
+def test_v3_policy_files_round_trip_and_refuse_another_layout(
+    change: dict[str, object], message: str, tmp_path: Path
+) -> None:
+    policy = _random_v3("map", 3)
+    path = save_policy(policy, tmp_path / "p.npz")
+    back = load_policy(path)
+    assert (back.observation, back.level, back.frames) == ("copi-local-v3", "map", 3)
+    x = np.random.default_rng(0).uniform(-1, 1, (5, 133))
+    np.testing.assert_array_equal(back.act_batch(x), policy.act_batch(x))
+    with pytest.raises(PolicyFormatError, match=message):
+        load_policy(_tamper(path, tmp_path / "bad.npz", **change))

@@ -98,7 +98,7 @@ def test_a_short_training_beats_a_random_policy(tmp_path: Path) -> None:
               validation_episodes=10)  # fmt: skip
         # a checkpoint of another run is refused; the same run with more steps resumes
         with pytest.raises(InvalidArgumentError, match="another training run"):
-            train(dataclasses.replace(cfg, learning_rate=3e-4), tmp_path / "x.npz",
+            train(dataclasses.replace(cfg, learning_rate=1e-3), tmp_path / "x.npz",
                   checkpoints=ckpt)  # fmt: skip
         summary = train(cfg, tmp_path / "p.npz", checkpoints=ckpt, validate_every=6_000,
                         validation_episodes=10)  # fmt: skip
@@ -132,6 +132,10 @@ def test_a_short_training_beats_a_random_policy(tmp_path: Path) -> None:
         (["--levels", "oracle"], "a local policy runs at sensor or map"),
         (["--seed", str(2**32)], "seed must be an int in 0 .. 4,294,967,295"),
         (["--net", ",".join(["8"] * 8)], "net must be 1 to 7 layer widths"),
+        (["--levels", "sensor,map"], "is learnt at one level"),
+        (["--observation", "pixels"], "observation must be one of"),
+        (["--observation", "copi-local-v2", "--frames", "3"], "frames must be an int in 2"),
+        (["--frames", "99"], "Invalid value for '--frames'"),
     ],
 )
 def test_bad_training_options_are_one_line(args: list[str], message: str, tmp_path: Path,
@@ -140,3 +144,34 @@ def test_bad_training_options_are_one_line(args: list[str], message: str, tmp_pa
     line = _one_line_error(*run(["rl", "train", "-o", str(out), *args], capsys)[::2])
     assert message in line, line
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("level", ["map", "sensor"])
+def test_the_v3_env_shows_what_the_v3_agent_sees(level: str) -> None:
+    """Training's contract with inference, step by step: the env's copi-local-v3
+    observation, fed to a policy, gives the velocity PPOAgent gives in the same state
+    (so they see the same reading, unexplained hits, stacked readings and velocity)."""
+    from copi.core import Observation
+    from copi.rl import LocalPolicyEnv
+    from copi.runs import make_task
+    from tests.rl.test_policy import _random_v3
+
+    policy = _random_v3(level, 3, seed=1)
+    env = LocalPolicyEnv(("star",), levels=(level,), observation="copi-local-v3", frames=3)
+    obs, _ = env.reset(seed=4)
+    assert obs.shape == (policy.size,)
+    agent = PPOAgent(policy=policy)
+    agent.reset(make_task(env.sim, level))
+    for _ in range(12):
+        sim = env.sim
+        seen = Observation(ranges=sim.ranges.copy(), goal=sim.goal - sim.position,
+                           position=sim.position.copy() if level == "map" else None,
+                           static=sim.sensor.scan(sim.world, sim.position) if level == "map"
+                           else None)  # fmt: skip
+        v = agent.act(seen)
+        a = policy.act(obs.astype(np.float64))
+        np.testing.assert_allclose(to_world(a, direction_frame(env.direction, 32), 32), v,
+                                   atol=1e-5)  # float32 observations  # fmt: skip
+        obs, _, done, cut, _ = env.step(a)
+        if done or cut:
+            break

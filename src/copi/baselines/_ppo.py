@@ -20,6 +20,24 @@ direction       2     the global direction in that frame (within half a ray of +
 reach           1     the distance to the point aimed at, over the range, clipped to 1
 ==============  ====  ================================================================
 
+A policy of the second observation, ``copi-local-v3`` (:func:`features_v3`), is learnt at
+one sensing level and sees what that level gives, in the same frame:
+
+==============  ==========  ==========================================================
+block           size        value
+==============  ==========  ==========================================================
+ranges          N           the reading, over the range
+unexplained     N (``map``) what the static reading says lies beyond each hit, over the
+                            range, 0 where the static world explains the hit: the hits of
+                            moving things (absent at ``sensor``, which has no map)
+change          (F - 1) N   the reading's change over each of the last F - 1 steps, most
+                            recent first, clipped to +-1.5 and over 1.5 (0 before the
+                            episode began): F readings stacked
+velocity        2           the agent's own last velocity (what it commanded), in the frame
+direction       2           as above
+reach           1           as above
+==============  ==========  ==========================================================
+
 Its action is the network's mean output, clipped to [-1, 1] per component and to norm 1,
 turned back to the world's frame.
 Training (``copi rl train``, the optional extra ``rl``: Stable-Baselines3 on torch)
@@ -53,11 +71,13 @@ __all__ = [
     "MAX_LAYERS",
     "MAX_WIDTH",
     "OBSERVATION",
+    "OBSERVATION_V3",
     "PPOAgent",
     "PolicyFormatError",
     "PolicyWeights",
     "direction_frame",
     "features",
+    "features_v3",
     "load_policy",
     "packaged_policy",
     "save_policy",
@@ -67,8 +87,14 @@ __all__ = [
 FORMAT = "copi-policy"
 FORMAT_VERSION = 1
 OBSERVATION = "copi-local-v2"
-"""The observation layout above (ranges, change, direction, reach, in the direction's
-frame)."""
+"""The first observation layout above (ranges, change, direction, reach, in the
+direction's frame)."""
+OBSERVATION_V3 = "copi-local-v3"
+"""The second (:func:`features_v3`): one level's reading, F readings stacked, the agent's
+own velocity."""
+OBSERVATIONS = (OBSERVATION, OBSERVATION_V3)
+MAX_FRAMES = 16
+"""Most readings a ``copi-local-v3`` policy stacks."""
 CHANGE_CLIP = 1.5
 """Largest change of a ray in one step the observation keeps (as contexts that see
 motion clip it)."""
@@ -84,8 +110,12 @@ class PolicyFormatError(CopiError):
     """A policy file is missing, truncated, foreign, of another observation, or tampered."""
 
 
-def observation_size(n_rays: int) -> int:
-    return 2 * n_rays + 3
+def observation_size(n_rays: int, observation: str = OBSERVATION, level: str = "sensor",
+                     frames: int = 2) -> int:  # fmt: skip
+    """The length of a policy's observation (see the module)."""
+    if observation == OBSERVATION:
+        return 2 * n_rays + 3
+    return n_rays * (1 + (level != "sensor") + frames - 1) + 5
 
 
 def direction_frame(direction: Any, n_rays: int) -> int:
@@ -152,6 +182,62 @@ def features(
     return x
 
 
+def features_v3(
+    ranges: Any,
+    history: Any,
+    static: Any,
+    velocity: Any,
+    direction: Any,
+    reach: float,
+    max_range: float,
+    frames: int,
+) -> NDArray[np.float64]:
+    """The ``copi-local-v3`` observation (see the module), in the frame of
+    ``direction_frame(direction, N)``: ``history`` the earlier readings, most recent
+    first (those missing count as no change), ``static`` the static reading at ``map``
+    (None at ``sensor``: no unexplained block), ``velocity`` the agent's last commanded
+    velocity in the world's axes.
+
+    Examples
+    --------
+    >>> f = features_v3([5.0, 6.0, 7.0, 8.0], [[5.0, 7.5, 7.0, 8.0]], [5.0, 9.0, 7.0, 8.0],
+    ...                 [0.0, 1.0], [0.0, 4.0], 20.0, 10.0, 2)
+    >>> f.round(2).tolist()   # turned by one ray: the reading starts at ray 1
+    [0.6, 0.7, 0.8, 0.5, 0.3, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0, 1.0]
+    """
+    r = np.asarray(ranges, dtype=np.float64)
+    n = r.shape[0]
+    k = direction_frame(direction, n)
+    blocks = [r / max_range]
+    if static is not None:
+        blocks.append(np.maximum(np.asarray(static, dtype=np.float64) - r, 0.0) / max_range)
+    newer = r
+    for j in range(frames - 1):
+        if j < len(history) and history[j] is not None:
+            older = np.asarray(history[j], dtype=np.float64)
+            blocks.append(np.clip(newer - older, -CHANGE_CLIP, CHANGE_CLIP) / CHANGE_CLIP)
+            newer = older
+        else:
+            blocks.append(np.zeros(n))
+    x = np.empty(n * len(blocks) + 5)
+    for i, block in enumerate(blocks):
+        x[i * n : (i + 1) * n] = np.roll(block, -k)
+    a = 2 * math.pi * k / n
+    c, s = math.cos(a), math.sin(a)
+    vx, vy = float(velocity[0]), float(velocity[1])
+    m = n * len(blocks)
+    x[m] = c * vx + s * vy  # the velocity turned back by the frame's angle
+    x[m + 1] = -s * vx + c * vy
+    dx, dy = float(direction[0]), float(direction[1])
+    if dx != 0.0 or dy != 0.0:
+        a = math.atan2(dy, dx) - a
+        x[m + 2], x[m + 3] = math.cos(a), math.sin(a)
+    else:
+        x[m + 2] = x[m + 3] = 0.0
+    x[m + 4] = min(1.0, max(0.0, float(reach)) / max_range)
+    return x
+
+
 @dataclass(frozen=True, eq=False)
 class PolicyWeights:
     """An actor network: ``len(layers)`` dense layers, tanh between them (none after the
@@ -163,9 +249,27 @@ class PolicyWeights:
     max_range: float = 10.0
     info: dict[str, Any] = field(default_factory=dict)
     """How it was trained (JSON-able): algorithm, families, levels, steps, seed, command."""
+    observation: str = OBSERVATION
+    """What it sees: :data:`OBSERVATION` or :data:`OBSERVATION_V3` (see the module)."""
+    level: str = "sensor"
+    """The sensing level a ``copi-local-v3`` policy was learnt at and sees ("sensor" or
+    "map"); a ``copi-local-v2`` policy sees the same at every level."""
+    frames: int = 2
+    """Readings a ``copi-local-v3`` policy stacks (the present and ``frames - 1``
+    before)."""
 
     def __post_init__(self) -> None:
-        _check_layers(self.layers, self.n_rays, "the policy")
+        if self.observation not in OBSERVATIONS:
+            raise InvalidArgumentError(f"observation must be one of {', '.join(OBSERVATIONS)}; "
+                                       f"got {self.observation!r}")  # fmt: skip
+        if self.level not in ("sensor", "map"):
+            raise InvalidArgumentError(f"a policy's level is sensor or map; got {self.level!r}")
+        if not (isinstance(self.frames, int) and 2 <= self.frames <= MAX_FRAMES) or (
+            self.observation == OBSERVATION and self.frames != 2
+        ):
+            raise InvalidArgumentError(f"frames must be an int in 2 .. {MAX_FRAMES} (2 for "
+                                       f"{OBSERVATION}); got {self.frames!r}")  # fmt: skip
+        _check_layers(self.layers, self.n_rays, "the policy", self.size)
         flat = np.concatenate([np.r_[w.T.ravel(), b] for w, b in self.layers])  # input-major
         shapes = np.array([w.shape for w, _ in self.layers], dtype=np.int64)
         object.__setattr__(self, "_flat", np.ascontiguousarray(flat, dtype=np.float64))
@@ -173,6 +277,11 @@ class PolicyWeights:
         width = int(max(max(w.shape) for w, _ in self.layers))
         # the forward pass's scratch rows, allocated once (a decision is a few us)
         object.__setattr__(self, "_buf", np.empty((2, width)))
+
+    @property
+    def size(self) -> int:
+        """The length of the observation it takes."""
+        return observation_size(self.n_rays, self.observation, self.level, self.frames)
 
     def act(self, x: NDArray[np.float64]) -> NDArray[np.float64]:
         """The velocity for one observation (mean action, clipped to [-1, 1] and norm 1)."""
@@ -237,11 +346,10 @@ def _forward(flat, shapes, x, buf, out):  # type: ignore[no-untyped-def]
     out[1] = vy
 
 
-def _check_layers(layers: Any, n_rays: int, where: str) -> None:
+def _check_layers(layers: Any, n_rays: int, where: str, width: int) -> None:
     if not isinstance(layers, tuple) or not 2 <= len(layers) <= MAX_LAYERS:
         got = len(layers) if isinstance(layers, tuple) else type(layers).__name__
         raise InvalidArgumentError(f"{where} must have 2 .. {MAX_LAYERS} layers; got {got}")
-    width = observation_size(n_rays)
     for i, (w, b) in enumerate(layers):
         if w.ndim != 2 or b.shape != (w.shape[0],):
             raise InvalidArgumentError(
@@ -249,7 +357,7 @@ def _check_layers(layers: Any, n_rays: int, where: str) -> None:
                 "(out, in) and (out,)"
             )
         if w.shape[1] != width:
-            what = f"the observation's {width} values ({OBSERVATION}, {n_rays} rays)" if i == 0 \
+            what = f"the observation's {width} values ({n_rays} rays)" if i == 0 \
                 else f"layer {i - 1}'s {width} outputs"  # fmt: skip
             raise InvalidArgumentError(
                 f"{where}: layer {i} takes {w.shape[1]} inputs; expected {what}"
@@ -274,7 +382,8 @@ def save_policy(policy: PolicyWeights, path: str | os.PathLike[str]) -> Path:
     for i, (w, b) in enumerate(policy.layers):
         arrays[f"w{i}"] = w
         arrays[f"b{i}"] = b
-    meta = {"format": FORMAT, "version": FORMAT_VERSION, "observation": OBSERVATION,
+    meta = {"format": FORMAT, "version": FORMAT_VERSION, "observation": policy.observation,
+            "level": policy.level, "frames": policy.frames,
             "layers": len(policy.layers), "n_rays": policy.n_rays,
             "max_range": policy.max_range, "activation": "tanh", "info": policy.info}  # fmt: skip
     arrays["metadata"] = np.array(json.dumps(meta, sort_keys=True))
@@ -290,11 +399,17 @@ def load_policy(path: str | os.PathLike[str]) -> PolicyWeights:
                  max_member=MAX_WIDTH * MAX_WIDTH * 8 + 4096, max_total=1 << 28)  # fmt: skip
     meta = read_metadata(a, p, fmt=FORMAT, version=FORMAT_VERSION, error=PolicyFormatError,
                          what="policy file")  # fmt: skip
-    if meta.get("observation") != OBSERVATION:
+    observation = meta.get("observation")
+    if observation not in OBSERVATIONS:
         raise PolicyFormatError(
-            f"{p}: a policy of observation {meta.get('observation')!r}; this copi feeds "
-            f"{OBSERVATION!r}"
+            f"{p}: a policy of observation {observation!r}; this copi feeds "
+            f"{' or '.join(map(repr, OBSERVATIONS))}"
         )
+    level, frames = meta.get("level", "sensor"), meta.get("frames", 2)
+    if level not in ("sensor", "map"):
+        raise PolicyFormatError(f"{p}: metadata 'level' must be sensor or map; got {level!r}")
+    if not (isinstance(frames, int) and 2 <= frames <= MAX_FRAMES):
+        raise PolicyFormatError(f"{p}: metadata 'frames' must be an int in 2 .. {MAX_FRAMES}")
     n_layers, n_rays, reach = meta.get("layers"), meta.get("n_rays"), meta.get("max_range")
     if not (isinstance(n_layers, int) and 2 <= n_layers <= MAX_LAYERS):
         raise PolicyFormatError(f"{p}: metadata 'layers' must be an int in 2 .. {MAX_LAYERS}")
@@ -315,7 +430,8 @@ def load_policy(path: str | os.PathLike[str]) -> PolicyWeights:
     info = meta.get("info", {})
     try:
         return PolicyWeights(tuple(layers), int(n_rays), float(reach),
-                             info if isinstance(info, dict) else {})  # fmt: skip
+                             info if isinstance(info, dict) else {}, observation, level,
+                             frames)  # fmt: skip
     except InvalidArgumentError as exc:
         raise PolicyFormatError(f"{p}: {exc}") from None
 
@@ -358,7 +474,10 @@ class PPOAgent(Steered):
         self._cand = np.ascontiguousarray(np.column_stack([np.cos(a), np.sin(a)])[None])
         self._ok = np.ones((1, 16), dtype=np.bool_)
         self._out = np.empty(5)
-        self._x = np.empty(observation_size(self.policy.n_rays))
+        self._x = np.empty(self.policy.size)
+        self._v3 = self.policy.observation == OBSERVATION_V3
+        # a copi-local-v3 policy sees its own level's reading: it runs at that level
+        self.sensing = self.policy.level if self._v3 else "sensor"  # type: ignore[assignment]
 
     def reset(self, task: Task) -> None:
         super().reset(task)
@@ -368,14 +487,29 @@ class PPOAgent(Steered):
                 f"{task.n_rays}"
             )
         self._prev: NDArray[np.float64] | None = None
+        self._history: list[NDArray[np.float64]] = []  # earlier readings, newest first (v3)
+        self._velocity = np.zeros(2)
         self._node = np.zeros((task.n_rays, 1))  # one node at 0, transposed (the kernels' layout)
         self._no_static = np.full(task.n_rays, np.inf)
 
     def steer(
         self, obs: Observation, desired: NDArray[np.float64], reach: float
     ) -> NDArray[np.float64]:
+        if self._v3:
+            p = self.policy
+            x = features_v3(obs.ranges, self._history, obs.static if p.level == "map" else None,
+                            self._velocity, desired, reach, p.max_range, p.frames)  # fmt: skip
+            self._history = [np.array(obs.ranges, dtype=np.float64), *self._history][: p.frames - 1]
+            v = self._steer_from(obs, x, desired, reach)
+            self._velocity = v.copy()
+            return v
         x = features(obs.ranges, self._prev, desired, reach, self.policy.max_range, self._x)
         self._prev = np.array(obs.ranges, dtype=np.float64)
+        return self._steer_from(obs, x, desired, reach)
+
+    def _steer_from(
+        self, obs: Observation, x: NDArray[np.float64], desired: NDArray[np.float64], reach: float
+    ) -> NDArray[np.float64]:
         v = to_world(self.policy.act(x), direction_frame(desired, self.policy.n_rays),
                      self.policy.n_rays)  # fmt: skip
         self._explained(v[None], [0.0], "the policy's action (its mean; no candidates)"

@@ -24,8 +24,9 @@ def train_command(
         str, typer.Option("--families", help="Comma-separated families of the episodes.")
     ] = "star,polygon,indoor,maps,crowd",
     levels: Annotated[
-        str, typer.Option("--levels", help="Sensing levels of the episodes: sensor, map.")
-    ] = "sensor,map",
+        str, typer.Option("--levels", help="Sensing level of the episodes: sensor or map "
+                          "(one for copi-local-v3; copi-local-v2 may mix them).")
+    ] = "map",
     task: Annotated[
         str, typer.Option("--task", help="navigation, or chauffeur (the game's evader).")
     ] = "navigation",
@@ -33,23 +34,53 @@ def train_command(
     seed: Annotated[int, seed_option("the network and the episodes' order")] = 0,
     envs: Annotated[int, typer.Option("--envs", min=1, max=256, help="Vectorised envs.")] = 8,
     learning_rate: Annotated[float, typer.Option("--lr", min=0.0, max=1.0,
-                                                 help="PPO's learning rate.")] = 1e-3,
-    ent_coef: Annotated[float, typer.Option("--ent", min=0.0, max=1.0)] = 0.0,
+                                                 help="PPO's learning rate.")] = 3e-4,
+    ent_coef: Annotated[float, typer.Option("--ent", min=0.0, max=1.0)] = 0.005,
     log_std: Annotated[float, typer.Option("--log-std", min=-5.0, max=2.0,
-                                           help="Initial log std of the actions.")] = -1.0,
-    net: Annotated[str, typer.Option("--net", help="Hidden layer widths, e.g. 64,64.")] = "64,64",
+                                           help="Initial log std of the actions.")] = -0.5,
+    net: Annotated[str, typer.Option("--net", help="Hidden layer widths, e.g. 64,64.")] = "128,128",
+    observation: Annotated[
+        str, typer.Option("--observation", help="What the policy sees: copi-local-v2 (ranges "
+                          "and their change, any level) or copi-local-v3 (one level's reading: "
+                          "the hits the map does not explain at map, --frames readings "
+                          "stacked, its own velocity).")
+    ] = "copi-local-v3",
+    frames: Annotated[
+        int, typer.Option("--frames", min=2, max=16, help="Readings stacked (copi-local-v3).")
+    ] = 3,
+    proximity: Annotated[
+        float, typer.Option("--proximity", min=0.0, max=1000.0, help="Most a step costs for "
+                            "coming within 1.5 steps of a moving obstacle (0: none).")
+    ] = 0.5,
+    contact: Annotated[
+        float, typer.Option("--contact", min=0.0, max=1000.0, help="What a contact costs.")
+    ] = 10.0,
+    n_steps: Annotated[
+        int, typer.Option("--n-steps", min=1, help="Steps per environment between updates.")
+    ] = 512,
+    batch_size: Annotated[int, typer.Option("--batch-size", min=1, help="Minibatch size.")] = 512,
     checkpoints: Annotated[
         Path | None,
         typer.Option("--checkpoints", help="Directory of checkpoints; a rerun resumes there."),
     ] = None,
+    validation_episodes: Annotated[
+        int, typer.Option("--validation-episodes", min=1, max=10_000,
+                          help="Episodes of validation seed 1 each point of the curve runs.")
+    ] = 60,
+    keep: Annotated[
+        str, typer.Option("--keep", help="The policy written: best (the highest validation "
+                          "success, on seed 1, which no report uses) or last.")
+    ] = "best",
     validate_every: Annotated[
         int, typer.Option("--validate-every", min=1000, help="Steps between validations.")
     ] = 100_000,
 ) -> None:
     """Train PPO (Stable-Baselines3) for a local policy in copi's factorisation: it sees
-    the ranges, their change and its level's global direction, and acts with a velocity.
-    Writes the policy (numpy weights, run by the methods ppo and ppo-guard), its
-    learning curve on fixed validation episodes (.json, .png). Needs the extra rl."""
+    its level's reading (at map, the hits the static map does not explain), the last
+    --frames readings, its own velocity and its level's global direction, and acts with a
+    velocity. Writes the policy (numpy weights: copi.baselines.PPOAgent(weights=FILE) runs
+    it, without torch), its learning curve on fixed validation episodes (.json, .png).
+    Needs the extra rl."""
     from copi.errors import InvalidArgumentError
     from copi.rl import Reward, TrainConfig, check_apart, train
 
@@ -67,8 +98,8 @@ def train_command(
         families=tuple(f.strip() for f in families.split(",") if f.strip()),
         levels=tuple(lv.strip() for lv in levels.split(",") if lv.strip()), task=task,
         steps=steps, seed=seed, envs=envs, learning_rate=learning_rate, ent_coef=ent_coef,
-        log_std=log_std,
-        net=widths, reward=Reward(),
+        log_std=log_std, net=widths, reward=Reward(proximity=proximity, contact=contact),
+        observation=observation, frames=frames, n_steps=n_steps, batch_size=batch_size,
     )  # fmt: skip
     check_writable(output.parent, "the policy")  # before hours of training, not after
     if checkpoints is not None:
@@ -80,14 +111,15 @@ def train_command(
     with progress() as bar:
         tid = bar.add_task("rl: environment steps", total=config.planned_steps)
         summary = train(config, output, checkpoints=checkpoints, validate_every=validate_every,
+                        validation_episodes=validation_episodes, keep=keep,
                         progress=lambda done, total: bar.update(tid, completed=done),
                         resumed=lambda done: out.print(
                             f"resuming at {done:,} of {config.planned_steps:,} steps from "
                             f"{checkpoints}"),
                         command=command)  # fmt: skip
-    last = summary["curve"][-1]
     out.print(
         f"{output}: PPO, {summary['steps']:,} steps in {summary['seconds']:.0f} s "
         f"({summary['steps_per_second']:,.0f} steps/s), validation success "
-        f"{100 * last['success']:.1f} %"
+        f"{100 * summary['curve'][-1]['success']:.1f} % at the end; kept: the policy of "
+        f"{summary['kept_steps']:,} steps ({100 * summary['kept_success']:.1f} %)"
     )

@@ -10,11 +10,16 @@ it).
 Episodes of the homicidal chauffeur (``task="chauffeur"``) take the game's direction for
 the evader instead, and end at capture.
 
+With ``observation="copi-local-v3"`` the agent sees one level's reading as
+:func:`copi.baselines.features_v3` gives it (the hits the static map does not explain at
+``map``, ``frames`` readings stacked, its own last velocity): one policy per level.
+
 Reward, shaped as the field does (progress along the global direction, a contact
-penalty, a success bonus), with :class:`Reward`'s weights: each step
-``progress * (moved . direction) - time``; at the goal ``+ success``; at a contact
-``- contact`` (the episode ends). In the chauffeur game each step survived earns
-``survive`` and a capture or contact costs ``contact``.
+penalty, a success bonus, a proximity penalty), with :class:`Reward`'s weights: each step
+``progress * (moved . direction) - time - proximity * max(0, 1 - gap / near)``, ``gap``
+the least distance between the agent's surface and a moving obstacle's over the step;
+at the goal ``+ success``; at a contact ``- contact`` (the episode ends). In the chauffeur
+game each step survived earns ``survive`` and a capture or contact costs ``contact``.
 """
 
 from __future__ import annotations
@@ -30,7 +35,8 @@ from gymnasium import spaces
 from numpy.typing import NDArray
 
 from copi._rng import check_seed
-from copi.baselines import direction_frame, features, observation_size, to_world
+from copi.baselines import direction_frame, features, features_v3, observation_size, to_world
+from copi.baselines._ppo import MAX_FRAMES, OBSERVATION, OBSERVATION_V3, OBSERVATIONS
 from copi.core import Observation, check_sensing
 from copi.errors import InvalidArgumentError, InvalidWorldError
 from copi.games import ChauffeurGame
@@ -71,12 +77,18 @@ class Reward:
     success: float = 10.0
     contact: float = 10.0
     survive: float = 0.05
+    proximity: float = 0.0
+    """The most a step costs for coming near a moving obstacle (at a touch)."""
+    near: float = 1.5
+    """Gap, in agent steps, below which the proximity penalty starts."""
 
     def __post_init__(self) -> None:
         for k, v in vars(self).items():
             if not (isinstance(v, int | float) and math.isfinite(v) and 0 <= v <= 1000):
                 raise InvalidArgumentError(f"reward weight {k} must be a number in [0, 1000]; "
                                            f"got {v!r}")  # fmt: skip
+        if self.near <= 0:
+            raise InvalidArgumentError(f"reward weight near must be above 0; got {self.near!r}")
 
 
 class LocalPolicyEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
@@ -99,6 +111,11 @@ class LocalPolicyEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
     seed_of_episodes : int
         The seed whose episodes are drawn, in 0 .. 2**63 - 1 (default
         :data:`TRAINING_SEED`).
+    observation : str
+        ``"copi-local-v2"`` (the ranges and their change, the same at every level) or
+        ``"copi-local-v3"`` (one level's reading, stacked; ``levels`` must then name one).
+    frames : int
+        Readings a ``copi-local-v3`` observation stacks, in 2 .. 16.
 
     Raises
     ------
@@ -118,6 +135,8 @@ class LocalPolicyEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         reward: Reward | None = None,
         max_steps: int = 500,
         seed_of_episodes: int = TRAINING_SEED,
+        observation: str = OBSERVATION,
+        frames: int = 2,
     ) -> None:
         if task not in ("navigation", "chauffeur"):
             raise InvalidArgumentError(f"task must be navigation or chauffeur; got {task!r}")
@@ -144,13 +163,28 @@ class LocalPolicyEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         # the episodes' generator is default_rng([seed_of_episodes, k]): a float, a
         # negative int or a bool would fail there, at the first reset, or draw elsewhere
         self.seed_of_episodes = check_seed(seed_of_episodes, "seed_of_episodes")
+        if observation not in OBSERVATIONS:
+            raise InvalidArgumentError(f"observation must be one of {', '.join(OBSERVATIONS)}; "
+                                       f"got {observation!r}")  # fmt: skip
+        self.observation = observation
+        self.v3 = observation == OBSERVATION_V3
+        if self.v3 and len(set(self.levels)) != 1:
+            raise InvalidArgumentError(f"a {OBSERVATION_V3} policy is learnt at one level (it "
+                                       f"sees that level's reading); got {levels!r}")  # fmt: skip
+        if not (isinstance(frames, int) and not isinstance(frames, bool)
+                and 2 <= frames <= MAX_FRAMES) or (not self.v3 and frames != 2):  # fmt: skip
+            raise InvalidArgumentError(f"frames must be an int in 2 .. {MAX_FRAMES} (2 for "
+                                       f"{OBSERVATION}); got {frames!r}")  # fmt: skip
+        self.frames = int(frames)
         n = 32
-        self.observation_space = spaces.Box(-1.0, 1.0, shape=(observation_size(n),),
-                                            dtype=np.float32)  # fmt: skip
+        size = observation_size(n, observation, self.levels[0], self.frames)
+        self.observation_space = spaces.Box(-1.0, 1.0, shape=(size,), dtype=np.float32)
         self.action_space = spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
         self.steering = Steering()
         self._x = np.empty(observation_size(n))
         self._prev: NDArray[np.float64] | None = None
+        self._history: list[NDArray[np.float64]] = []
+        self._velocity = np.zeros(2)
         self.game: Any = None
         self.direction = np.zeros(2)
 
@@ -205,6 +239,12 @@ class LocalPolicyEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
                               position=sim.position if map_level else None)  # fmt: skip
             d, reach = self.steering.aim(obs)
             self.direction = np.asarray(d, dtype=np.float64)
+        if self.v3:
+            static = sim.sensor.scan(sim.world, sim.position) if self.level == "map" else None
+            x = features_v3(sim.ranges, self._history, static, self._velocity, self.direction,
+                            reach, sim.sensor.max_range, self.frames)  # fmt: skip
+            self._history = [sim.ranges.copy(), *self._history][: self.frames - 1]
+            return x.astype(np.float32)
         x = features(sim.ranges, self._prev, self.direction, reach, sim.sensor.max_range,
                      self._x)  # fmt: skip
         self._prev = sim.ranges.copy()
@@ -219,6 +259,8 @@ class LocalPolicyEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         self._drawn_from = copy.deepcopy(self.np_random.bit_generator.state)
         self._actions: list[NDArray[np.float64]] = []
         self._prev = None
+        self._history = []
+        self._velocity = np.zeros(2)
         self._draw()
         self.t = 0
         self._ended = None
@@ -273,6 +315,7 @@ class LocalPolicyEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
             a /= norm
         n = self.sim.sensor.n_rays
         a = to_world(a, direction_frame(self.direction, n), n)
+        self._velocity = a
         w = self.reward
         before = self.sim.position.copy()
         u = self.direction
@@ -295,6 +338,8 @@ class LocalPolicyEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         res = self.sim.step(a)
         moved = self.sim.position - before
         reward = w.progress * (float(moved @ u) / un if un > 0 else 0.0) - w.time
+        if w.proximity > 0 and res.min_gap < w.near:
+            reward -= w.proximity * (1.0 - max(0.0, res.min_gap) / w.near)
         terminated = bool(res.reached or res.contact)
         if res.reached and not res.contact:
             reward += w.success

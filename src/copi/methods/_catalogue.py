@@ -50,6 +50,13 @@ _RL_POLICIES = [
       for f in ("star", "polygon", "indoor", "maps", "crowd")],
     ("ppo-chauffeur", "ppo-chauffeur", 0.0, "PPO trained as the evader of the homicidal "
      "chauffeur (Experiment 2), under the game's direction"),
+    # the second peer: one policy per level, given what the level gives (docs/rl.md)
+    *[(f"ppo-{f}-map", f"ppo-{f}-map", 0.0, f"PPO trained on the {f} family at map, seeing "
+       "what copi-learnt sees there (the reading, the hits the static map does not explain, "
+       "three readings stacked, its own velocity) under the route's direction; nothing "
+       "hand-written") for f in ("star", "polygon", "indoor", "maps", "crowd")],
+    *[(f"ppo-guard-{f}-map", f"ppo-{f}-map", 1.05, f"ppo-{f}-map shielded by compass-guard's "
+       "hand-written guard") for f in ("star", "polygon", "indoor", "maps", "crowd")],
 ]  # fmt: skip
 
 
@@ -141,6 +148,7 @@ def _register_builtins() -> None:
     # copi/data/rl with the commands that trained them). A policy absent is left out.
     for name, weights, guard, summary in _RL_POLICIES:
         reg(name, PPOAgent, default=name in ("ppo", "ppo-guard"), requires="rl-weights",
+            sensing="map" if weights.endswith("-map") else "sensor",
             available=_weights_present(weights), inputs=_weights_hash(weights),
             params={"weights": weights, "guard": guard}, summary=summary,
             missing=f"its trained weights {weights}.npz, which copi does not ship here: train "

@@ -30,8 +30,9 @@ def _beside(out: Path) -> tuple[Path, Path]:
     return out.with_suffix(".json"), out.with_suffix(".png")
 
 
-CHECKPOINT_FILES = ("last.pt", "last.json", "last.pt.tmp")
-"""The files a checkpoints directory holds (``last.pt.tmp``: while ``last.pt`` is written)."""
+CHECKPOINT_FILES = ("last.pt", "last.json", "last.pt.tmp", "best.npz")
+"""The files a checkpoints directory holds (``last.pt.tmp``: while ``last.pt`` is written;
+``best.npz``: the policy of the best validation so far)."""
 
 
 def check_apart(output: str | os.PathLike[str],

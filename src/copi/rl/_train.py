@@ -19,7 +19,8 @@ from typing import Any
 import numpy as np
 
 from copi._files import write_text
-from copi.baselines import PolicyWeights, PPOAgent, save_policy
+from copi.baselines import PolicyWeights, PPOAgent, load_policy, save_policy
+from copi.baselines._ppo import OBSERVATION
 from copi.envs.local_policy import LocalPolicyEnv
 from copi.errors import CopiError, Interrupted, InvalidArgumentError, InvalidWorldError
 from copi.experiments import PursuitConfig, run_game
@@ -75,9 +76,11 @@ def _need_rl() -> None:
 
 
 def export_policy(model: Any, n_rays: int = 32, max_range: float = 10.0,
-                  info: dict[str, Any] | None = None) -> PolicyWeights:  # fmt: skip
+                  info: dict[str, Any] | None = None,
+                  config: TrainConfig | None = None) -> PolicyWeights:  # fmt: skip
     """The actor of a Stable-Baselines3 PPO ``MlpPolicy`` (tanh) as numpy weights: the
-    policy network's linear layers, then the action network."""
+    policy network's linear layers, then the action network; what it sees as ``config``
+    says (``copi-local-v2`` without one)."""
     import torch
 
     policy = model.policy
@@ -90,7 +93,11 @@ def export_policy(model: Any, n_rays: int = 32, max_range: float = 10.0,
         elif not isinstance(module, torch.nn.Tanh):
             raise InvalidArgumentError(f"cannot export a {type(module).__name__} layer (tanh "
                                        "MLPs only)")  # fmt: skip
-    return PolicyWeights(tuple(layers), n_rays, max_range, info or {})
+    if config is None or config.observation == OBSERVATION:
+        return PolicyWeights(tuple(layers), n_rays, max_range, info or {})
+    level = "map" if config.task == "chauffeur" else config.levels[0]
+    return PolicyWeights(tuple(layers), n_rays, max_range, info or {}, config.observation,
+                         level, config.frames)  # fmt: skip
 
 
 def validation_success(
@@ -129,14 +136,19 @@ def train(
     progress: Callable[[int, int], None] | None = None,
     resumed: Callable[[int], None] | None = None,
     command: str = "",
+    keep: str = "best",
 ) -> dict[str, Any]:
     """Train PPO as ``config`` says and write the exported policy to ``output`` (and
     ``output`` with ``.json`` and ``.png``: the learning curve). With ``checkpoints``, the
     model is saved there every ``validate_every`` steps (weights and optimiser state as
     torch tensors, loaded with ``weights_only``: no pickle), and a rerun resumes from the
     last one (``resumed`` is told the steps it resumes at). ``progress(done, total)`` counts
-    to :attr:`TrainConfig.planned_steps`. Returns the run's summary (steps, seconds, steps
-    per second, curve)."""
+    to :attr:`TrainConfig.planned_steps`. ``keep``: the policy written, ``"best"`` (the
+    snapshot of the highest validation success, the latest of equals: model selection on
+    the validation seed, which no report uses) or ``"last"``. Returns the run's summary
+    (steps, seconds, steps per second, curve, the steps of the policy kept)."""
+    if keep not in ("best", "last"):
+        raise InvalidArgumentError(f"keep must be best or last; got {keep!r}")
     check_apart(output, checkpoints)
     _need_rl()
     import torch
@@ -151,7 +163,8 @@ def train(
     def make(i: int) -> Callable[[], LocalPolicyEnv]:
         def env() -> LocalPolicyEnv:
             e = LocalPolicyEnv(config.families, levels=config.levels, task=config.task,
-                               reward=config.reward, max_steps=config.max_steps)  # fmt: skip
+                               reward=config.reward, max_steps=config.max_steps,
+                               observation=config.observation, frames=config.frames)  # fmt: skip
             e.reset(seed=config.seed * 1000 + i)
             return e
 
@@ -167,6 +180,7 @@ def train(
                        "activation_fn": torch.nn.Tanh, "log_std_init": config.log_std},
     )  # fmt: skip
     curve: list[dict[str, float]] = []
+    best: list[Any] = [None, -1.0]  # the policy of the best validation, its success
     elapsed0 = 0.0
     checkpointed = 0  # steps of the last checkpoint written whole (0: none yet)
     ckpt = None if checkpoints is None else Path(checkpoints)
@@ -177,6 +191,9 @@ def train(
             elapsed0 = _restore(model, vec, saved, ckpt)
             curve = list(saved["meta"]["curve"])
             checkpointed = int(model.num_timesteps)
+            if (ckpt / "best.npz").is_file():
+                kept = load_policy(ckpt / "best.npz")
+                best[:] = [kept, float(kept.info.get("validation_success", -1.0))]
             if resumed is not None:
                 resumed(int(model.num_timesteps))
     if progress is not None:
@@ -185,7 +202,8 @@ def train(
     t0 = time.perf_counter()
 
     def snapshot() -> PolicyWeights:
-        return export_policy(model, info={"algorithm": "PPO", **config.identity()})
+        return export_policy(model, info={"algorithm": "PPO", **config.identity()},
+                             config=config)  # fmt: skip
 
     class Watch(BaseCallback):  # type: ignore[misc]
         """Progress at every step; validation (and a checkpoint) between rollouts, where
@@ -209,11 +227,18 @@ def train(
     def record() -> None:
         nonlocal checkpointed
         seconds = elapsed0 + time.perf_counter() - t0
+        now = snapshot()
+        success = validation_success(now, config, validation_episodes)
         curve.append({"steps": int(model.num_timesteps), "seconds": round(seconds, 1),
-                      "success": validation_success(snapshot(), config,
-                                                    validation_episodes)})  # fmt: skip
+                      "success": success})  # fmt: skip
+        improved = success >= best[1]
+        if improved:
+            now.info.update(validation_success=success, kept_steps=int(model.num_timesteps))
+            best[:] = [now, success]
         if ckpt is not None:
             with _whole():
+                if improved:
+                    save_policy(now, ckpt / "best.npz")
                 _write_checkpoint(ckpt, model, vec, config, curve, seconds)
                 checkpointed = int(model.num_timesteps)
 
@@ -236,13 +261,24 @@ def train(
         "seconds": round(seconds, 1),
         "steps_per_second": round(model.num_timesteps / max(seconds, 1e-9), 1),
         "curve": curve,
+        "validation_episodes": validation_episodes,
         "config": config.identity(),
         "command": command,
     }
     policy = export_policy(model, info={"algorithm": "PPO (Stable-Baselines3)",
                                         "steps_per_second": summary["steps_per_second"],
                                         "seconds": summary["seconds"], "command": command,
-                                        **config.identity()})  # fmt: skip
+                                        **config.identity()}, config=config)  # fmt: skip
+    policy.info.update(validation_success=curve[-1]["success"],
+                       kept_steps=int(model.num_timesteps), kept="last")  # fmt: skip
+    if keep == "best" and best[0] is not None and best[1] > curve[-1]["success"]:
+        policy = PolicyWeights(best[0].layers, policy.n_rays, policy.max_range,
+                               {**policy.info, "validation_success": best[1],
+                                "kept_steps": best[0].info["kept_steps"]},
+                               policy.observation, policy.level, policy.frames)  # fmt: skip
+    policy.info["kept"] = keep
+    summary["kept_steps"] = policy.info["kept_steps"]
+    summary["kept_success"] = policy.info["validation_success"]
     save_policy(policy, out)
     write_text(curve_path, json.dumps(summary, indent=1) + "\n", "json")
     _curve_figure(curve, figure_path, title=out.stem)

@@ -73,7 +73,11 @@ def test_ctrl_c_while_a_checkpoint_is_written_leaves_it_whole(
                 validation_episodes=1)  # fmt: skip
     saved = c._read_checkpoint(ck, _config())
     assert saved is not None and saved["meta"]["steps"] == 768
-    assert sorted(p.name for p in ck.iterdir()) == ["last.json", "last.pt"]
+    # and the best validated policy so far (the first validation's), written whole
+    assert sorted(p.name for p in ck.iterdir()) == ["best.npz", "last.json", "last.pt"]
+    from copi.baselines import load_policy
+
+    assert load_policy(ck / "best.npz").info["kept_steps"] == 768
 
 
 def test_ctrl_c_without_checkpoints_says_how_to_keep_them(tmp_path: Path) -> None:

@@ -46,25 +46,27 @@ episodes of validation seed 1): SB3's default exploration noise (noisy, log std 
 (base, -1; calm, -2), and with base's noise a larger learning rate or wider layers."""
 FIRST = ["--observation", "copi-local-v2", "--levels", "sensor,map", "--frames", "2",
          "--proximity", "0", "--ent", "0", "--net", "64,64", "--n-steps", "256",
-         "--batch-size", "256"]
+         "--batch-size", "256", "--raw-reward"]
 """The first peer's settings apart from :data:`TUNING`'s (its defaults when it was
 trained)."""
 SECOND = {f"{f}-map": ["--families", f, "--levels", "map"] for f in FAMILIES}
 TUNING_SECOND = {
     "default": [],
+    "raw-reward": ["--raw-reward"],
     "no-proximity": ["--proximity", "0"],
     "frames-2": ["--frames", "2"],
     "frames-5": ["--frames", "5"],
     "contact-30": ["--contact", "30"],
     "wide": ["--net", "256,256"],
     "first-peer": ["--lr", "1e-3", "--log-std", "-1", "--ent", "0", "--net", "64,64",
-                   "--n-steps", "256", "--batch-size", "256", "--proximity", "0"],
+                   "--n-steps", "256", "--batch-size", "256", "--proximity", "0",
+                   "--raw-reward"],
 }
 """The settings tried for the second peer on star at map (``--tune``): copi rl train's
 defaults (lr 3e-4, 8 envs x 512 steps, batches of 512, entropy 0.005, log std -0.5,
-128-128 tanh layers, 3 readings, proximity penalty 0.5, contact 10), then one change
-each: no proximity penalty, 2 or 5 readings, a contact cost of 30, wider layers, and
-the first peer's optimiser settings."""
+128-128 tanh layers, 3 readings, proximity penalty 0.5, contact 10, the reward scaled by
+its running spread), then one change each: the raw reward, no proximity penalty, 2 or 5
+readings, a contact cost of 30, wider layers, and the first peer's settings."""
 SHIPPED = Path(__file__).resolve().parents[1] / "src" / "copi" / "data" / "rl"
 DOCS = Path(__file__).resolve().parents[1] / "docs"
 

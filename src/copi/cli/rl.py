@@ -52,6 +52,10 @@ def train_command(
         float, typer.Option("--proximity", min=0.0, max=1000.0, help="Most a step costs for "
                             "coming within 1.5 steps of a moving obstacle (0: none).")
     ] = 0.5,
+    normalize_reward: Annotated[
+        bool, typer.Option("--normalize-reward/--raw-reward", help="Scale the reward by the "
+                           "running spread of its return (the observation stays raw).")
+    ] = True,
     contact: Annotated[
         float, typer.Option("--contact", min=0.0, max=1000.0, help="What a contact costs.")
     ] = 10.0,
@@ -99,7 +103,8 @@ def train_command(
         levels=tuple(lv.strip() for lv in levels.split(",") if lv.strip()), task=task,
         steps=steps, seed=seed, envs=envs, learning_rate=learning_rate, ent_coef=ent_coef,
         log_std=log_std, net=widths, reward=Reward(proximity=proximity, contact=contact),
-        observation=observation, frames=frames, n_steps=n_steps, batch_size=batch_size,
+        observation=observation, frames=frames, normalize_reward=normalize_reward,
+        n_steps=n_steps, batch_size=batch_size,
     )  # fmt: skip
     check_writable(output.parent, "the policy")  # before hours of training, not after
     if checkpoints is not None:

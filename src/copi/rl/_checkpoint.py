@@ -78,7 +78,8 @@ def _whole() -> Iterator[None]:
 
 
 def _write_checkpoint(ckpt: Path, model: Any, vec: Any, config: TrainConfig,
-                      curve: list[dict[str, float]], seconds: float) -> None:  # fmt: skip
+                      curve: list[dict[str, float]], seconds: float,
+                      norm: Any = None) -> None:  # fmt: skip
     """Everything the run's future depends on, between two rollouts: the weights and the
     optimiser's state, every random generator (torch's, numpy's, Python's), and each
     environment's state (:meth:`LocalPolicyEnv.state`), as tensors (``last.pt``, read
@@ -110,6 +111,10 @@ def _write_checkpoint(ckpt: Path, model: Any, vec: Any, config: TrainConfig,
         "envs": [{"drawn_from": s["drawn_from"], "ended": s["ended"]} for s in envs],
         "last_pt_sha256": hashlib.sha256(data).hexdigest(),
     }
+    if norm is not None:  # the reward's running scale (VecNormalize), as plain numbers
+        meta["reward_norm"] = {"mean": float(norm.ret_rms.mean), "var": float(norm.ret_rms.var),
+                               "count": float(norm.ret_rms.count),
+                               "returns": [float(r) for r in norm.returns]}  # fmt: skip
     (ckpt / "last.pt.tmp").write_bytes(data)
     os.replace(ckpt / "last.pt.tmp", ckpt / "last.pt")
     write_text(ckpt / "last.json", json.dumps(meta), "json")
@@ -256,6 +261,15 @@ def _check_meta(ckpt: Path, meta: dict[str, Any], config: TrainConfig) -> None:
             and _is_int(python_rng[1][-1], 0, 624)
             and (python_rng[2] is None or _is_real(python_rng[2]))):  # fmt: skip
         raise refuse("python_rng", python_rng, "Python's random state (random.getstate)")
+    if config.normalize_reward:
+        norm = meta.get("reward_norm", _MISSING)
+        if not (isinstance(norm, dict) and set(norm) == {"mean", "var", "count", "returns"}
+                and _is_real(norm["mean"]) and _is_real(norm["var"]) and norm["var"] >= 0
+                and _is_real(norm["count"]) and norm["count"] > 0
+                and isinstance(norm["returns"], list) and len(norm["returns"]) == config.envs
+                and all(_is_real(r) for r in norm["returns"])):  # fmt: skip
+            raise refuse("reward_norm", norm, "the reward's running mean, variance (>= 0), "
+                         f"count (> 0) and the {config.envs} environments' returns")  # fmt: skip
     digest = meta.get("last_pt_sha256", _MISSING)
     # absent from the checkpoints of copi before it was recorded
     if digest is not _MISSING and not (
@@ -326,7 +340,8 @@ def _read_checkpoint(ckpt: Path, config: TrainConfig) -> dict[str, Any] | None:
     return {"meta": meta, "tensors": tensors}
 
 
-def _restore(model: Any, vec: Any, saved: dict[str, Any], ckpt: Path) -> float:
+def _restore(model: Any, vec: Any, saved: dict[str, Any], ckpt: Path,
+             norm: Any = None) -> float:  # fmt: skip
     """The model, the random generators and the environments as ``saved`` (the
     checkpoint in ``ckpt``); returns the wall time already spent."""
     import random
@@ -347,6 +362,12 @@ def _restore(model: Any, vec: Any, saved: dict[str, Any], ckpt: Path) -> float:
         version, inner, gauss = meta["python_rng"]
         random.setstate((version, tuple(inner), gauss))
         torch.set_rng_state(tensors["torch_rng"])
+        if norm is not None:
+            saved_norm = meta["reward_norm"]
+            norm.ret_rms.mean = np.float64(saved_norm["mean"])
+            norm.ret_rms.var = np.float64(saved_norm["var"])
+            norm.ret_rms.count = float(saved_norm["count"])
+            norm.returns = np.asarray(saved_norm["returns"], dtype=np.float64)
     except Exception as exc:  # a part of another shape or kind than the run's
         first = " ".join(str(exc).split())[:160]
         raise InvalidArgumentError(f"{ckpt} does not fit this run ({type(exc).__name__}: "

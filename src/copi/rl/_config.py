@@ -39,8 +39,9 @@ class TrainConfig:
     """Environments stepped together (a vectorised environment in this process)."""
     learning_rate: float = 3e-4
     """The defaults from here to ``reward``: the setting chosen on validation seed 1 among
-    those docs/rl.md lists (``studies/rl_tune.py``; the first peer's were lr 1e-3,
-    n_steps 256, batch 256, ent 0, log_std -1, net 64-64, no proximity penalty)."""
+    those docs/rl.md lists (``studies/rl_train_all.py --tune``; the first peer's were lr 1e-3,
+    n_steps 256, batch 256, ent 0, log_std -1, net 64-64, no proximity penalty, the
+    reward raw)."""
     n_steps: int = 512
     """Steps per environment between updates."""
     batch_size: int = 512
@@ -58,6 +59,9 @@ class TrainConfig:
     reading, ``frames`` readings stacked, and needs one level."""
     frames: int = 3
     """Readings a ``copi-local-v3`` observation stacks."""
+    normalize_reward: bool = True
+    """Scale the reward by the running spread of its discounted return (SB3's
+    VecNormalize, the observation left raw); the first peer trained without."""
 
     def __post_init__(self) -> None:
         for f in self.families:
@@ -91,6 +95,9 @@ class TrainConfig:
         ):
             raise InvalidArgumentError(f"net must be 1 to {most} layer widths in 1 .. "
                                        f"{MAX_WIDTH}; got {self.net!r}")  # fmt: skip
+        if not isinstance(self.normalize_reward, bool):
+            raise InvalidArgumentError("normalize_reward must be True or False; got "
+                                       f"{self.normalize_reward!r}")  # fmt: skip
         if self.observation not in OBSERVATIONS:
             raise InvalidArgumentError(f"observation must be one of {', '.join(OBSERVATIONS)}; "
                                        f"got {self.observation!r}")  # fmt: skip

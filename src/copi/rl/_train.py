@@ -154,7 +154,7 @@ def train(
     import torch
     from stable_baselines3 import PPO
     from stable_baselines3.common.callbacks import BaseCallback
-    from stable_baselines3.common.vec_env import DummyVecEnv
+    from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
 
     torch.set_num_threads(1)
     out = Path(output)
@@ -172,8 +172,13 @@ def train(
 
     vec = DummyVecEnv([make(i) for i in range(config.envs)])
     vec.seed(config.seed)
+    # the reward scaled by the running spread of its discounted return (the observation
+    # is left as it is: the exported policy reads it raw)
+    norm = VecNormalize(vec, norm_obs=False, norm_reward=True, gamma=config.gamma) \
+        if config.normalize_reward else None  # fmt: skip
     model = PPO(
-        "MlpPolicy", vec, learning_rate=config.learning_rate, n_steps=config.n_steps,
+        "MlpPolicy", vec if norm is None else norm, learning_rate=config.learning_rate,
+        n_steps=config.n_steps,
         batch_size=config.batch_size, n_epochs=config.n_epochs, gamma=config.gamma,
         ent_coef=config.ent_coef, seed=config.seed, device="cpu", verbose=0,
         policy_kwargs={"net_arch": {"pi": list(config.net), "vf": list(config.net)},
@@ -188,7 +193,7 @@ def train(
         ckpt.mkdir(parents=True, exist_ok=True)
         saved = _read_checkpoint(ckpt, config)
         if saved is not None:
-            elapsed0 = _restore(model, vec, saved, ckpt)
+            elapsed0 = _restore(model, vec, saved, ckpt, norm)
             curve = list(saved["meta"]["curve"])
             checkpointed = int(model.num_timesteps)
             if (ckpt / "best.npz").is_file():
@@ -239,7 +244,7 @@ def train(
             with _whole():
                 if improved:
                     save_policy(now, ckpt / "best.npz")
-                _write_checkpoint(ckpt, model, vec, config, curve, seconds)
+                _write_checkpoint(ckpt, model, vec, config, curve, seconds, norm)
                 checkpointed = int(model.num_timesteps)
 
     left = config.steps - model.num_timesteps

@@ -167,6 +167,12 @@ CASES = [
      "last.json's numpy_rng[1][0] is an integer of 5,000 digits"),
     (lambda ck: _json(ck, lambda m: {k: v for k, v in m.items() if k != "curve"}),
      "last.json's curve is missing; expected a learning curve of 1 to 2 points"),
+    (lambda ck: _json(ck, lambda m: {**m, "reward_norm": {**m["reward_norm"], "var": -1.0}}),
+     "last.json's reward_norm is"),
+    (lambda ck: _json(ck, lambda m: {k: v for k, v in m.items() if k != "reward_norm"}),
+     "last.json's reward_norm is missing; expected the reward's running mean"),
+    (lambda ck: _json(ck, lambda m: {**m, "reward_norm": {**m["reward_norm"], "returns": [1.0]}}),
+     "the 3 environments' returns"),
     (lambda ck: _json(ck, lambda m: {**m, "curve": []}), "last.json's curve is []"),
     (lambda ck: _json(ck, lambda m: {**m, "steps": 10**12}),
      "last.json's steps is 1000000000000; expected a whole number of rollouts of 384 steps "

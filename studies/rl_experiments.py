@@ -399,7 +399,7 @@ def main() -> None:
             succ[fam, arm.method, arm.sensing] = _success(rows)
             rate[fam, arm.method, arm.sensing] = summarize_rows(rows)["success"]
     policies = {}
-    for name in ["mix", *FAMILIES, "chauffeur"]:
+    for name in ["mix", *FAMILIES, "chauffeur", *[f"{f}-map" for f in FAMILIES]]:
         path = packaged_policy(f"ppo-{name}").with_suffix(".json")
         if path.is_file():
             policies[f"ppo-{name}"] = json.loads(path.read_text())
@@ -472,10 +472,9 @@ def main() -> None:
         "1, and a contact cost of 50 instead of 10 tried on star (no better), it learnt "
         "to follow the global direction at full speed and to swerve late, not to wait or "
         "back off: the last column compares it with `straight` (the direction, no "
-        "avoidance). A peer that learns avoidance (e.g. CrowdNav-style attention over the "
-        "obstacles, which needs their positions: level oracle) may stand higher; these "
-        "rows show what PPO reached on copi's factorisation in 2M steps, not what deep RL "
-        "can do.",
+        "avoidance). These rows show what the first peer reached in 2M steps without the "
+        "static reading copi's methods read at map, not what deep RL can do: the second "
+        "peer (the section above) is given that reading, one policy per level.",
         "",
         "## Training seeds (level map)",
         "",
@@ -571,12 +570,13 @@ def main() -> None:
         lines += ["", "How the curves flatten: from the first to the second half of the second "
                   "million steps, mean validation success moves by at most "
                   f"{abs(moves[most]):.1f} points ({most}; 60 episodes a point, one episode "
-                  "is 1.7 points): the curves have flattened within the budget, and 2M steps "
-                  "keep every run within 20 minutes on 2 cores."]  # fmt: skip
+                  "is 1.7 points). The longest run took "
+                  f"{max(i['seconds'] for i in policies.values()) / 60:.0f} min (runs two at a "
+                  "time, one per core)."]  # fmt: skip
     lines += ["", "![learning cost](rl.png)", "",
               "The learning curves of the shipped policies (validation success against "
               "environment steps, as `copi rl train` draws them):", ""]
-    for name in ["mix", *FAMILIES, "chauffeur"]:
+    for name in ["mix", *FAMILIES, "chauffeur", *[f"{f}-map" for f in FAMILIES]]:
         if (Path(a.out).parent / f"rl-curve-{name}.png").is_file():
             lines.append(f"![ppo-{name}](rl-curve-{name}.png)")
     lines.append("")

@@ -380,8 +380,11 @@ def save_policy(policy: PolicyWeights, path: str | os.PathLike[str]) -> Path:
     """Write ``policy`` to ``path`` (``.npz``, no pickle), atomically."""
     arrays: dict[str, Any] = {}
     for i, (w, b) in enumerate(policy.layers):
-        arrays[f"w{i}"] = w
-        arrays[f"b{i}"] = b
+        # a network trained in float32 (torch's) is stored in float32: half the bytes, the
+        # same numbers (read back as float64, exactly)
+        for key, arr in ((f"w{i}", w), (f"b{i}", b)):
+            single = arr.astype(np.float32)
+            arrays[key] = single if np.array_equal(single, arr) else arr
     meta = {"format": FORMAT, "version": FORMAT_VERSION, "observation": policy.observation,
             "level": policy.level, "frames": policy.frames,
             "layers": len(policy.layers), "n_rays": policy.n_rays,

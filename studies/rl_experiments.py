@@ -108,7 +108,7 @@ def second_peer_lines(succ: dict, rate: dict) -> list[str]:
         "`ppo-F-map`: PPO trained on family F at level map only, seeing what copi-learnt "
         "sees there (the reading, the hits the static map does not explain, three readings "
         "stacked, its own last velocity, the route's direction: `copi-local-v3`), with a "
-        "proximity penalty and its settings chosen among seven on validation seed 1 "
+        "proximity penalty and its settings chosen among eight on validation seed 1 "
         "(`python studies/rl_train_all.py --tune`, the table below). Learnt alone: "
         "`copi-predictive` (a learnt model of what moves and a planner over it, no "
         "hand-written guard) beside `ppo-F-map`. Guarded: `copi-learnt` (learnt choice, "
@@ -285,7 +285,7 @@ def seed_spread(bench: Path, episodes: int, games: int) -> dict[tuple[str, int, 
     store = bench / "seeds.sqlite"
     spread: dict[tuple[str, int, str], dict] = {}
     for fam in FAMILIES:
-        names = [m for m, (c, _) in policies.items() if c in (fam, "mix")]
+        names = [m for m, (c, _) in policies.items() if c in (fam, "mix", f"{fam}-map")]
         if names:
             config = BenchmarkConfig(methods=tuple(parse_methods(",".join(f"{m}@map"
                                                                           for m in names))),
@@ -612,12 +612,14 @@ def seed_rows(succ: dict, seeds: dict[tuple[str, int, str], dict[int, bool]],
                 f"{'—' if math.isnan(sd) else f'{sd:.1f}'} | {copi:.1f} % | {copi - mean:+.1f} |")
 
     rows = []
-    for fam in FAMILIES:
-        first = succ.get((fam, f"ppo-{fam}", "map"))
+    for config in [*FAMILIES, *[f"{f}-map" for f in FAMILIES]]:
+        fam = config.removesuffix("-map")
+        first = succ.get((fam, f"ppo-{config}", "map"))
         if first is None:
             continue
-        per = {0: rate(first), **{s: rate(w) for (c, s, _), w in seeds.items() if c == fam}}
-        rows.append(row(f"ppo-{fam}", per, rate(succ[(fam, "copi-learnt", "map")])))
+        per = {0: rate(first), **{s: rate(w) for (c, s, f), w in seeds.items()
+                                  if c == config and f == fam}}  # fmt: skip
+        rows.append(row(f"ppo-{config}", per, rate(succ[(fam, "copi-learnt", "map")])))
     if all((f, "ppo", "map") in succ for f in FAMILIES):
         per = {0: float(np.mean([rate(succ[(f, "ppo", "map")]) for f in FAMILIES]))}
         for s in sorted({s for (c, s, _) in seeds if c == "mix"}):

@@ -35,8 +35,17 @@ from gymnasium import spaces
 from numpy.typing import NDArray
 
 from copi._rng import check_seed
-from copi.baselines import direction_frame, features, features_v3, observation_size, to_world
-from copi.baselines._ppo import MAX_FRAMES, OBSERVATION, OBSERVATION_V3, OBSERVATIONS
+from copi.baselines import (
+    MAX_FRAMES,
+    OBSERVATION,
+    OBSERVATION_V3,
+    OBSERVATIONS,
+    direction_frame,
+    features,
+    features_v3,
+    observation_size,
+    to_world,
+)
 from copi.core import Observation, check_sensing
 from copi.errors import InvalidArgumentError, InvalidWorldError
 from copi.games import ChauffeurGame

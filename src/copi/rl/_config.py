@@ -8,8 +8,14 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
-from copi.baselines import MAX_LAYERS, MAX_WIDTH
-from copi.baselines._ppo import MAX_FRAMES, OBSERVATION, OBSERVATION_V3, OBSERVATIONS
+from copi.baselines import (
+    MAX_FRAMES,
+    MAX_LAYERS,
+    MAX_WIDTH,
+    OBSERVATION,
+    OBSERVATION_V3,
+    OBSERVATIONS,
+)
 from copi.envs.local_policy import Reward
 from copi.errors import InvalidArgumentError
 from copi.world import check_family

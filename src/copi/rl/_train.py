@@ -19,8 +19,7 @@ from typing import Any
 import numpy as np
 
 from copi._files import write_text
-from copi.baselines import PolicyWeights, PPOAgent, load_policy, save_policy
-from copi.baselines._ppo import OBSERVATION
+from copi.baselines import OBSERVATION, PolicyWeights, PPOAgent, load_policy, save_policy
 from copi.envs.local_policy import LocalPolicyEnv
 from copi.errors import CopiError, Interrupted, InvalidArgumentError, InvalidWorldError
 from copi.experiments import PursuitConfig, run_game

@@ -75,6 +75,7 @@ __all__ = [
     "PPOAgent",
     "PolicyFormatError",
     "PolicyWeights",
+    "check_layout",
     "direction_frame",
     "features",
     "features_v3",
@@ -116,6 +117,24 @@ def observation_size(n_rays: int, observation: str = OBSERVATION, level: str = "
     if observation == OBSERVATION:
         return 2 * n_rays + 3
     return n_rays * (1 + (level != "sensor") + frames - 1) + 5
+
+
+def check_layout(observation: Any, frames: Any, levels: tuple[str, ...] | None = None) -> None:
+    """Refuse, in one line, an observation that is not one of :data:`OBSERVATIONS`, a
+    number of readings it cannot stack, or (``levels``: those a policy is learnt at) a
+    ``copi-local-v3`` policy learnt at more than one level."""
+    if observation not in OBSERVATIONS:
+        raise InvalidArgumentError(f"observation must be one of {', '.join(OBSERVATIONS)}; "
+                                   f"got {observation!r}")  # fmt: skip
+    if isinstance(frames, bool) or not isinstance(frames, int) or not (
+        2 <= frames <= MAX_FRAMES and (observation == OBSERVATION_V3 or frames == 2)
+    ):
+        raise InvalidArgumentError(f"frames must be an int in 2 .. {MAX_FRAMES} (2 for "
+                                   f"{OBSERVATION}); got {frames!r}")  # fmt: skip
+    if observation == OBSERVATION_V3 and levels is not None and len(set(levels)) != 1:
+        raise InvalidArgumentError(f"a {OBSERVATION_V3} policy is learnt at one level (it sees "
+                                   f"that level's reading); got levels "
+                                   f"{', '.join(levels)}")  # fmt: skip
 
 
 def direction_frame(direction: Any, n_rays: int) -> int:
@@ -170,16 +189,22 @@ def features(
                          CHANGE_CLIP) / CHANGE_CLIP  # fmt: skip
         x[n : 2 * n - k] = change[k:]
         x[2 * n - k : 2 * n] = change[:k]
-    dx, dy = float(direction[0]), float(direction[1])
-    norm = math.hypot(dx, dy)
-    if norm > 0:
-        a = math.atan2(dy, dx) - 2 * math.pi * k / n
-        x[2 * n] = math.cos(a)
-        x[2 * n + 1] = math.sin(a)
-    else:
-        x[2 * n] = x[2 * n + 1] = 0.0
-    x[2 * n + 2] = min(1.0, max(0.0, float(reach)) / max_range)
+    _aim_into(x, 2 * n, direction, k, n, reach, max_range)
     return x
+
+
+def _aim_into(x: NDArray[np.float64], m: int, direction: Any, k: int, n: int, reach: float,
+              max_range: float) -> None:  # fmt: skip
+    """The last blocks of both observations at ``x[m:m + 3]``: the direction in the frame
+    of ``k`` rays (0 for none) and the reach over the range, clipped to 1."""
+    dx, dy = float(direction[0]), float(direction[1])
+    if dx != 0.0 or dy != 0.0:
+        a = math.atan2(dy, dx) - 2 * math.pi * k / n
+        x[m] = math.cos(a)
+        x[m + 1] = math.sin(a)
+    else:
+        x[m] = x[m + 1] = 0.0
+    x[m + 2] = min(1.0, max(0.0, float(reach)) / max_range)
 
 
 def features_v3(
@@ -228,13 +253,7 @@ def features_v3(
     m = n * len(blocks)
     x[m] = c * vx + s * vy  # the velocity turned back by the frame's angle
     x[m + 1] = -s * vx + c * vy
-    dx, dy = float(direction[0]), float(direction[1])
-    if dx != 0.0 or dy != 0.0:
-        a = math.atan2(dy, dx) - a
-        x[m + 2], x[m + 3] = math.cos(a), math.sin(a)
-    else:
-        x[m + 2] = x[m + 3] = 0.0
-    x[m + 4] = min(1.0, max(0.0, float(reach)) / max_range)
+    _aim_into(x, m + 2, direction, k, n, reach, max_range)
     return x
 
 
@@ -259,16 +278,9 @@ class PolicyWeights:
     before)."""
 
     def __post_init__(self) -> None:
-        if self.observation not in OBSERVATIONS:
-            raise InvalidArgumentError(f"observation must be one of {', '.join(OBSERVATIONS)}; "
-                                       f"got {self.observation!r}")  # fmt: skip
+        check_layout(self.observation, self.frames)
         if self.level not in ("sensor", "map"):
             raise InvalidArgumentError(f"a policy's level is sensor or map; got {self.level!r}")
-        if not (isinstance(self.frames, int) and 2 <= self.frames <= MAX_FRAMES) or (
-            self.observation == OBSERVATION and self.frames != 2
-        ):
-            raise InvalidArgumentError(f"frames must be an int in 2 .. {MAX_FRAMES} (2 for "
-                                       f"{OBSERVATION}); got {self.frames!r}")  # fmt: skip
         _check_layers(self.layers, self.n_rays, "the policy", self.size)
         flat = np.concatenate([np.r_[w.T.ravel(), b] for w, b in self.layers])  # input-major
         shapes = np.array([w.shape for w, _ in self.layers], dtype=np.int64)

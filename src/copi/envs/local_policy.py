@@ -36,10 +36,9 @@ from numpy.typing import NDArray
 
 from copi._rng import check_seed
 from copi.baselines import (
-    MAX_FRAMES,
     OBSERVATION,
     OBSERVATION_V3,
-    OBSERVATIONS,
+    check_layout,
     direction_frame,
     features,
     features_v3,
@@ -172,18 +171,9 @@ class LocalPolicyEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         # the episodes' generator is default_rng([seed_of_episodes, k]): a float, a
         # negative int or a bool would fail there, at the first reset, or draw elsewhere
         self.seed_of_episodes = check_seed(seed_of_episodes, "seed_of_episodes")
-        if observation not in OBSERVATIONS:
-            raise InvalidArgumentError(f"observation must be one of {', '.join(OBSERVATIONS)}; "
-                                       f"got {observation!r}")  # fmt: skip
+        check_layout(observation, frames, self.levels)
         self.observation = observation
         self.v3 = observation == OBSERVATION_V3
-        if self.v3 and len(set(self.levels)) != 1:
-            raise InvalidArgumentError(f"a {OBSERVATION_V3} policy is learnt at one level (it "
-                                       f"sees that level's reading); got {levels!r}")  # fmt: skip
-        if not (isinstance(frames, int) and not isinstance(frames, bool)
-                and 2 <= frames <= MAX_FRAMES) or (not self.v3 and frames != 2):  # fmt: skip
-            raise InvalidArgumentError(f"frames must be an int in 2 .. {MAX_FRAMES} (2 for "
-                                       f"{OBSERVATION}); got {frames!r}")  # fmt: skip
         self.frames = int(frames)
         n = 32
         size = observation_size(n, observation, self.levels[0], self.frames)

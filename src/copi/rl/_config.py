@@ -8,14 +8,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
-from copi.baselines import (
-    MAX_FRAMES,
-    MAX_LAYERS,
-    MAX_WIDTH,
-    OBSERVATION,
-    OBSERVATION_V3,
-    OBSERVATIONS,
-)
+from copi.baselines import MAX_LAYERS, MAX_WIDTH, OBSERVATION_V3, check_layout
 from copi.envs.local_policy import Reward
 from copi.errors import InvalidArgumentError
 from copi.world import check_family
@@ -104,19 +97,9 @@ class TrainConfig:
         if not isinstance(self.normalize_reward, bool):
             raise InvalidArgumentError("normalize_reward must be True or False; got "
                                        f"{self.normalize_reward!r}")  # fmt: skip
-        if self.observation not in OBSERVATIONS:
-            raise InvalidArgumentError(f"observation must be one of {', '.join(OBSERVATIONS)}; "
-                                       f"got {self.observation!r}")  # fmt: skip
-        v3 = self.observation == OBSERVATION_V3
-        if isinstance(self.frames, bool) or not isinstance(self.frames, int) or not (
-            2 <= self.frames <= MAX_FRAMES and (v3 or self.frames == 2)
-        ):
-            raise InvalidArgumentError(f"frames must be an int in 2 .. {MAX_FRAMES} (2 for "
-                                       f"{OBSERVATION}); got {self.frames!r}")  # fmt: skip
-        if v3 and self.task == "navigation" and len(set(self.levels)) != 1:
-            raise InvalidArgumentError(f"a {OBSERVATION_V3} policy is learnt at one level (it "
-                                       f"sees that level's reading); got levels "
-                                       f"{', '.join(self.levels)}")  # fmt: skip
+        # the chauffeur's evader is learnt at map whatever the levels say
+        check_layout(self.observation, self.frames,
+                     self.levels if self.task == "navigation" else None)  # fmt: skip
         if not self.families or not self.levels:
             raise InvalidArgumentError("families and levels must each name at least one; got "
                                        f"families {self.families!r}, levels {self.levels!r}")

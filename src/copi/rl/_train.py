@@ -184,7 +184,7 @@ def train(
                        "activation_fn": torch.nn.Tanh, "log_std_init": config.log_std},
     )  # fmt: skip
     curve: list[dict[str, float]] = []
-    best: list[Any] = [None, -1.0]  # the policy of the best validation, its success
+    best: PolicyWeights | None = None  # the best validation's (its success in its info)
     elapsed0 = 0.0
     checkpointed = 0  # steps of the last checkpoint written whole (0: none yet)
     ckpt = None if checkpoints is None else Path(checkpoints)
@@ -196,8 +196,7 @@ def train(
             curve = list(saved["meta"]["curve"])
             checkpointed = int(model.num_timesteps)
             if (ckpt / "best.npz").is_file():
-                kept = load_policy(ckpt / "best.npz")
-                best[:] = [kept, float(kept.info.get("validation_success", -1.0))]
+                best = load_policy(ckpt / "best.npz")
             if resumed is not None:
                 resumed(int(model.num_timesteps))
     if progress is not None:
@@ -229,16 +228,16 @@ def train(
                 record()
 
     def record() -> None:
-        nonlocal checkpointed
+        nonlocal checkpointed, best
         seconds = elapsed0 + time.perf_counter() - t0
         now = snapshot()
         success = validation_success(now, config, validation_episodes)
         curve.append({"steps": int(model.num_timesteps), "seconds": round(seconds, 1),
                       "success": success})  # fmt: skip
-        improved = success >= best[1]
+        improved = best is None or success >= best.info["validation_success"]
         if improved:
             now.info.update(validation_success=success, kept_steps=int(model.num_timesteps))
-            best[:] = [now, success]
+            best = now
         if ckpt is not None:
             with _whole():
                 if improved:
@@ -275,10 +274,12 @@ def train(
                                         **config.identity()}, config=config)  # fmt: skip
     policy.info.update(validation_success=curve[-1]["success"],
                        kept_steps=int(model.num_timesteps), kept="last")  # fmt: skip
-    if keep == "best" and best[0] is not None and best[1] > curve[-1]["success"]:
-        policy = PolicyWeights(best[0].layers, policy.n_rays, policy.max_range,
-                               {**policy.info, "validation_success": best[1],
-                                "kept_steps": best[0].info["kept_steps"]},
+    if keep == "best" and best is not None and \
+            best.info["validation_success"] > curve[-1]["success"]:  # fmt: skip
+        policy = PolicyWeights(best.layers, policy.n_rays, policy.max_range,
+                               {**policy.info, "validation_success":
+                                best.info["validation_success"],
+                                "kept_steps": best.info["kept_steps"]},
                                policy.observation, policy.level, policy.frames)  # fmt: skip
     policy.info["kept"] = keep
     summary["kept_steps"] = policy.info["kept_steps"]

@@ -300,6 +300,7 @@ def test_a_v3_agent_runs_at_its_level_and_remembers_what_it_saw() -> None:
         ({"level": "oracle"}, "'level' must be sensor or map"),
         ({"level": "sensor"}, "layer 0 takes 133 inputs; expected the observation's 101"),
         ({"frames": 4}, "layer 0 takes 133 inputs; expected the observation's 165"),
+        ({"output": "relu"}, "metadata 'output' must be clip or tanh; got 'relu'"),
     ],
 )
 def test_v3_policy_files_round_trip_and_refuse_another_layout(

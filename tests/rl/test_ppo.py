@@ -78,6 +78,31 @@ def test_the_export_runs_in_numpy_as_the_torch_policy_does(tmp_path: Path) -> No
     np.testing.assert_allclose(load_policy(path).act_batch(x), want, atol=1e-5)
 
 
+def test_a_sac_actor_runs_in_numpy_as_torch_s_squashed_mean(tmp_path: Path) -> None:
+    from stable_baselines3 import SAC
+
+    from copi.rl import LocalPolicyEnv
+    from copi.rl._train import export_policy
+
+    model = SAC("MlpPolicy", LocalPolicyEnv(("star",)), seed=0, device="cpu",
+                learning_starts=0, buffer_size=100,
+                policy_kwargs={"net_arch": {"pi": [32, 16], "qf": [32, 16]},
+                               "activation_fn": torch.nn.Tanh})  # fmt: skip
+    policy = export_policy(model)
+    assert policy.output == "tanh"
+    x = np.random.default_rng(0).uniform(-1, 1, (200, 67)).astype(np.float32)
+    with torch.no_grad():
+        want = model.actor(torch.as_tensor(x), deterministic=True).numpy().astype(np.float64)
+    norm = np.hypot(want[:, 0], want[:, 1])
+    want[norm > 1] /= norm[norm > 1, None]
+    np.testing.assert_allclose(policy.act_batch(x), want, atol=1e-5)
+    np.testing.assert_allclose([policy.act(xi.astype(np.float64)) for xi in x], want, atol=1e-5)
+    path = save_policy(policy, tmp_path / "p.npz")
+    back = load_policy(path)
+    assert back.output == "tanh"
+    np.testing.assert_allclose(back.act_batch(x), want, atol=1e-5)
+
+
 def test_a_short_training_beats_a_random_policy(tmp_path: Path) -> None:
     from copi.rl import TrainConfig, train
     from copi.runs import run_episode
@@ -136,6 +161,8 @@ def test_a_short_training_beats_a_random_policy(tmp_path: Path) -> None:
         (["--observation", "pixels"], "observation must be one of"),
         (["--observation", "copi-local-v2", "--frames", "3"], "frames must be an int in 2"),
         (["--frames", "99"], "Invalid value for '--frames'"),
+        (["--algo", "dqn"], "algorithm must be one of ppo, sac; got 'dqn'"),
+        (["--algo", "sac", "--buffer-size", "0"], "Invalid value for '--buffer-size'"),
     ],
 )
 def test_bad_training_options_are_one_line(args: list[str], message: str, tmp_path: Path,

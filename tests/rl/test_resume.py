@@ -61,6 +61,46 @@ def test_a_resumed_run_gives_the_weights_of_an_uninterrupted_one(tmp_path: Path)
     assert resumed == [saved] and counts[0] == (saved, 1536) and counts[-1] == (1536, 1536)
 
 
+def test_a_resumed_sac_run_gives_the_weights_of_an_uninterrupted_one(tmp_path: Path) -> None:
+    """SAC's checkpoint holds its replay buffer, its entropy coefficient and the warm-up's
+    generator: resumed mid-warm-up or after it, the weights are those of a run that was
+    never stopped."""
+    pytest.importorskip("torch")
+    pytest.importorskip("stable_baselines3")
+    from copi.rl import train
+
+    cfg = _config(algorithm="sac", steps=900, buffer_size=600, learning_starts=300,
+                  batch_size=32)  # the buffer wraps: 900 steps into 600  # fmt: skip
+    assert cfg.planned_steps == 900 and cfg.identity()["algorithm"] == "sac"
+    assert "buffer_size" not in _config().identity()  # PPO's identity as before SAC
+
+    def go(out: Path, ckpt: Path | None = None, **kw: Any) -> Any:
+        return train(cfg, out, checkpoints=ckpt, validate_every=200, validation_episodes=1,
+                     **kw)  # fmt: skip
+
+    go(tmp_path / "whole.npz")
+    for cut in (250, 700):  # before learning starts, and after the buffer wrapped
+        ck = tmp_path / f"ck{cut}"
+
+        def stop(done: int, total: int, cut: int = cut) -> None:
+            if done >= cut:
+                raise KeyboardInterrupt
+
+        with pytest.raises(Interrupted):
+            go(tmp_path / f"cut{cut}.npz", ck, progress=stop)
+        meta = json.loads((ck / "last.json").read_text())
+        assert 0 < meta["steps"] < 900 and set(meta["buffer"]) == {"pos", "full"}
+        go(tmp_path / f"cut{cut}.npz", ck)
+        assert _digest(tmp_path / f"cut{cut}.npz") == _digest(tmp_path / "whole.npz")
+    # a spoilt buffer position is refused in one line
+    meta = json.loads((tmp_path / "ck700" / "last.json").read_text())
+    meta["buffer"]["pos"] += 1
+    (tmp_path / "ck700" / "last.json").write_text(json.dumps(meta))
+    with pytest.raises(InvalidArgumentError, match=r"last.json's buffer is .*; expected where "
+                       "a buffer of 200 rows writes"):  # fmt: skip
+        go(tmp_path / "again.npz", tmp_path / "ck700")
+
+
 def test_progress_counts_the_whole_rollouts_a_run_takes(tmp_path: Path) -> None:
     pytest.importorskip("torch")
     pytest.importorskip("stable_baselines3")

@@ -38,8 +38,9 @@ direction       2           as above
 reach           1           as above
 ==============  ==========  ==========================================================
 
-Its action is the network's mean output, clipped to [-1, 1] per component and to norm 1,
-turned back to the world's frame.
+Its action is the network's mean output, clipped to [-1, 1] per component (PPO's; a SAC
+actor's, squashed by tanh: the policy's ``output``) and to norm 1, turned back to the
+world's frame.
 Training (``copi rl train``, the optional extra ``rl``: Stable-Baselines3 on torch)
 exports the actor's weights to an ``.npz`` of plain arrays (:func:`save_policy`), read
 here without torch and without pickle (:func:`load_policy`, validated as capabilities
@@ -99,6 +100,9 @@ MAX_FRAMES = 16
 CHANGE_CLIP = 1.5
 """Largest change of a ray in one step the observation keeps (as contexts that see
 motion clip it)."""
+OUTPUTS = ("clip", "tanh")
+"""How a policy's last layer becomes a velocity: its mean clipped to [-1, 1] (PPO's
+Gaussian policy) or squashed by tanh (SAC's), then to norm 1."""
 MAX_LAYERS = 8
 MAX_WIDTH = 1024
 MAX_WEIGHT = 1e4
@@ -276,9 +280,15 @@ class PolicyWeights:
     frames: int = 2
     """Readings a ``copi-local-v3`` policy stacks (the present and ``frames - 1``
     before)."""
+    output: str = "clip"
+    """How the last layer becomes a velocity (:data:`OUTPUTS`): ``clip`` (PPO) or
+    ``tanh`` (SAC)."""
 
     def __post_init__(self) -> None:
         check_layout(self.observation, self.frames)
+        if self.output not in OUTPUTS:
+            raise InvalidArgumentError(f"a policy's output is {' or '.join(OUTPUTS)}; got "
+                                       f"{self.output!r}")  # fmt: skip
         if self.level not in ("sensor", "map"):
             raise InvalidArgumentError(f"a policy's level is sensor or map; got {self.level!r}")
         _check_layers(self.layers, self.n_rays, "the policy", self.size)
@@ -296,13 +306,15 @@ class PolicyWeights:
         return observation_size(self.n_rays, self.observation, self.level, self.frames)
 
     def act(self, x: NDArray[np.float64]) -> NDArray[np.float64]:
-        """The velocity for one observation (mean action, clipped to [-1, 1] and norm 1)."""
+        """The velocity for one observation (mean action, clipped or squashed into
+        [-1, 1] as :attr:`output` says, then to norm 1)."""
         x = np.asarray(x, dtype=np.float64)
         if x.shape != (self.layers[0][0].shape[1],):
             raise ValueError(f"an observation of shape ({self.layers[0][0].shape[1]},) was "
                              f"expected; got {x.shape}")  # fmt: skip
         out = np.empty(2)
-        _forward(self._flat, self._shapes, x, self._buf, out)  # type: ignore[attr-defined]
+        _forward(self._flat, self._shapes, x, self._buf, out,  # type: ignore[attr-defined]
+                 self.output == "tanh")  # fmt: skip
         return out
 
     def act_batch(self, x: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -312,7 +324,10 @@ class PolicyWeights:
             h = h @ w.T + b
             if i < len(self.layers) - 1:
                 np.tanh(h, out=h)
-        np.clip(h, -1.0, 1.0, out=h)
+        if self.output == "tanh":
+            np.tanh(h, out=h)
+        else:
+            np.clip(h, -1.0, 1.0, out=h)
         norm = np.hypot(h[:, 0], h[:, 1])
         big = norm > 1.0
         h[big] /= norm[big, None]
@@ -320,12 +335,13 @@ class PolicyWeights:
 
 
 @numba.njit(cache=True)
-def _forward(flat, shapes, x, buf, out):  # type: ignore[no-untyped-def]
+def _forward(flat, shapes, x, buf, out, squash):  # type: ignore[no-untyped-def]
     """The actor's forward pass over packed layers (numba: a Python loop of numpy calls
     costs ~2 us a layer, over the 10 us a decision may take). Each layer's weights are
     packed input-major (W transposed), so that one input updates every unit at once:
     the loop over units vectorises while each unit's sum keeps its order (inputs 0, 1,
-    ..., then the bias), the same on every processor (no fastmath)."""
+    ..., then the bias), the same on every processor (no fastmath). ``squash``: the
+    output through tanh (SAC's), else clipped (PPO's)."""
     m = x.shape[0]
     a = buf[0]
     b = buf[1]
@@ -348,8 +364,12 @@ def _forward(flat, shapes, x, buf, out):  # type: ignore[no-untyped-def]
             b[i] = math.tanh(s) if li < nl - 1 else s
         off += rows * cols + rows
         a, b = b, a
-    vx = min(1.0, max(-1.0, a[0]))
-    vy = min(1.0, max(-1.0, a[1]))
+    if squash:
+        vx = math.tanh(a[0])
+        vy = math.tanh(a[1])
+    else:
+        vx = min(1.0, max(-1.0, a[0]))
+        vy = min(1.0, max(-1.0, a[1]))
     n = math.hypot(vx, vy)
     if n > 1.0:
         vx /= n
@@ -398,7 +418,7 @@ def save_policy(policy: PolicyWeights, path: str | os.PathLike[str]) -> Path:
             single = arr.astype(np.float32)
             arrays[key] = single if np.array_equal(single, arr) else arr
     meta = {"format": FORMAT, "version": FORMAT_VERSION, "observation": policy.observation,
-            "level": policy.level, "frames": policy.frames,
+            "level": policy.level, "frames": policy.frames, "output": policy.output,
             "layers": len(policy.layers), "n_rays": policy.n_rays,
             "max_range": policy.max_range, "activation": "tanh", "info": policy.info}  # fmt: skip
     arrays["metadata"] = np.array(json.dumps(meta, sort_keys=True))
@@ -425,6 +445,10 @@ def load_policy(path: str | os.PathLike[str]) -> PolicyWeights:
         raise PolicyFormatError(f"{p}: metadata 'level' must be sensor or map; got {level!r}")
     if not (isinstance(frames, int) and 2 <= frames <= MAX_FRAMES):
         raise PolicyFormatError(f"{p}: metadata 'frames' must be an int in 2 .. {MAX_FRAMES}")
+    output = meta.get("output", "clip")  # absent from the files of PPO before SAC came
+    if output not in OUTPUTS:
+        raise PolicyFormatError(f"{p}: metadata 'output' must be {' or '.join(OUTPUTS)}; got "
+                                f"{output!r}"[:200])  # fmt: skip
     n_layers, n_rays, reach = meta.get("layers"), meta.get("n_rays"), meta.get("max_range")
     if not (isinstance(n_layers, int) and 2 <= n_layers <= MAX_LAYERS):
         raise PolicyFormatError(f"{p}: metadata 'layers' must be an int in 2 .. {MAX_LAYERS}")
@@ -446,7 +470,7 @@ def load_policy(path: str | os.PathLike[str]) -> PolicyWeights:
     try:
         return PolicyWeights(tuple(layers), int(n_rays), float(reach),
                              info if isinstance(info, dict) else {}, observation, level,
-                             frames)  # fmt: skip
+                             frames, output)  # fmt: skip
     except InvalidArgumentError as exc:
         raise PolicyFormatError(f"{p}: {exc}") from None
 

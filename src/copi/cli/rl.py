@@ -1,4 +1,4 @@
-"""``copi rl train``: a local policy learnt by deep RL (PPO) on copi's episodes."""
+"""``copi rl train``: a local policy learnt by deep RL (PPO or SAC) on copi's episodes."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ import typer
 from copi._files import check_outputs, check_writable
 from copi.cli._common import app, out, progress, seed_option
 
-rl_app = typer.Typer(help="Deep RL as copi's learning peer: train PPO policies.",
+rl_app = typer.Typer(help="Deep RL as copi's learning peer: train PPO or SAC policies.",
                      no_args_is_help=True)  # fmt: skip
 app.add_typer(rl_app, name="rl")
 
@@ -30,12 +30,17 @@ def train_command(
     task: Annotated[
         str, typer.Option("--task", help="navigation, or chauffeur (the game's evader).")
     ] = "navigation",
+    algo: Annotated[
+        str, typer.Option("--algo", help="ppo (on-policy) or sac (off-policy, a replay "
+                          "buffer; its own entropy target).")
+    ] = "ppo",
     steps: Annotated[int, typer.Option("--steps", min=1, help="Environment steps.")] = 2_000_000,
     seed: Annotated[int, seed_option("the network and the episodes' order")] = 0,
     envs: Annotated[int, typer.Option("--envs", min=1, max=256, help="Vectorised envs.")] = 8,
     learning_rate: Annotated[float, typer.Option("--lr", min=0.0, max=1.0,
-                                                 help="PPO's learning rate.")] = 3e-4,
-    ent_coef: Annotated[float, typer.Option("--ent", min=0.0, max=1.0)] = 0.005,
+                                                 help="The learning rate.")] = 3e-4,
+    ent_coef: Annotated[float, typer.Option("--ent", min=0.0, max=1.0,
+                                            help="PPO's entropy bonus.")] = 0.005,
     log_std: Annotated[float, typer.Option("--log-std", min=-5.0, max=2.0,
                                            help="Initial log std of the actions.")] = -0.5,
     net: Annotated[str, typer.Option("--net", help="Hidden layer widths, e.g. 64,64.")] = "128,128",
@@ -60,9 +65,22 @@ def train_command(
         float, typer.Option("--contact", min=0.0, max=1000.0, help="What a contact costs.")
     ] = 10.0,
     n_steps: Annotated[
-        int, typer.Option("--n-steps", min=1, help="Steps per environment between updates.")
+        int, typer.Option("--n-steps", min=1, help="PPO: steps per environment between "
+                          "updates.")
     ] = 512,
     batch_size: Annotated[int, typer.Option("--batch-size", min=1, help="Minibatch size.")] = 512,
+    buffer_size: Annotated[
+        int, typer.Option("--buffer-size", min=1, max=10_000_000, help="SAC: transitions its "
+                          "replay buffer keeps.")
+    ] = 100_000,
+    learning_starts: Annotated[
+        int, typer.Option("--learning-starts", min=0, help="SAC: steps of random actions "
+                          "before it learns.")
+    ] = 10_000,
+    gradient_steps: Annotated[
+        int, typer.Option("--gradient-steps", min=1, max=1000, help="SAC: gradient steps "
+                          "after each step of the environments.")
+    ] = 1,
     checkpoints: Annotated[
         Path | None,
         typer.Option("--checkpoints", help="Directory of checkpoints; a rerun resumes there."),
@@ -79,7 +97,7 @@ def train_command(
         int, typer.Option("--validate-every", min=1000, help="Steps between validations.")
     ] = 100_000,
 ) -> None:
-    """Train PPO (Stable-Baselines3) for a local policy in copi's factorisation: it sees
+    """Train PPO or SAC (Stable-Baselines3) for a local policy in copi's factorisation: it sees
     its level's reading (at map, the hits the static map does not explain), the last
     --frames readings, its own velocity and its level's global direction, and acts with a
     velocity. Writes the policy (numpy weights: copi.baselines.PPOAgent(weights=FILE) runs
@@ -104,15 +122,17 @@ def train_command(
         steps=steps, seed=seed, envs=envs, learning_rate=learning_rate, ent_coef=ent_coef,
         log_std=log_std, net=widths, reward=Reward(proximity=proximity, contact=contact),
         observation=observation, frames=frames, normalize_reward=normalize_reward,
-        n_steps=n_steps, batch_size=batch_size,
+        n_steps=n_steps, batch_size=batch_size, algorithm=algo, buffer_size=buffer_size,
+        learning_starts=learning_starts, gradient_steps=gradient_steps,
     )  # fmt: skip
     check_writable(output.parent, "the policy")  # before hours of training, not after
     if checkpoints is not None:
         check_writable(checkpoints, "checkpoints")
     command = "copi " + " ".join(shlex.quote(a) for a in sys.argv[1:])
     if config.planned_steps != steps:
-        out.print(f"training {config.planned_steps:,} steps: PPO trains in whole rollouts of "
-                  f"{config.envs} envs x {config.n_steps} steps (asked for {steps:,})")
+        how = (f"PPO trains in whole rollouts of {config.envs} envs x {config.n_steps} steps"
+               if algo == "ppo" else f"SAC steps its {config.envs} envs together")  # fmt: skip
+        out.print(f"training {config.planned_steps:,} steps: {how} (asked for {steps:,})")
     with progress() as bar:
         tid = bar.add_task("rl: environment steps", total=config.planned_steps)
         summary = train(config, output, checkpoints=checkpoints, validate_every=validate_every,
@@ -123,7 +143,7 @@ def train_command(
                             f"{checkpoints}"),
                         command=command)  # fmt: skip
     out.print(
-        f"{output}: PPO, {summary['steps']:,} steps in {summary['seconds']:.0f} s "
+        f"{output}: {algo.upper()}, {summary['steps']:,} steps in {summary['seconds']:.0f} s "
         f"({summary['steps_per_second']:,.0f} steps/s), validation success "
         f"{100 * summary['curve'][-1]['success']:.1f} % at the end; kept: the policy of "
         f"{summary['kept_steps']:,} steps ({100 * summary['kept_success']:.1f} %)"

@@ -176,11 +176,12 @@ def _register_builtins() -> None:
     # CrowdNav's robot ORCA (its test.py: time horizon 5 s, 10 neighbours within 10 m, no
     # safety space but every radius 0.01 m larger: 0.02 m between two agents, navground's
     # margin being added once to the sum of radii), in the units of its scenarios (a step
-    # of 0.25 m): the check that copi's circle crossing is CrowdNav's
+    # of 0.25 m; navground's neighbour distance is twice its horizon): the check that
+    # copi's circle crossing is CrowdNav's
     reg("crowdnav-orca", _navground("ORCA"), sensing="oracle", requires="peers",
         available=navground_available,
         missing="navground, which is not installed: pip install 'copi[peers]'",
-        params={"safety_margin": 0.08, "horizon": 40.0, "time_horizon": 20.0, "neighbours": 10},
+        params={"safety_margin": 0.08, "horizon": 20.0, "time_horizon": 20.0, "neighbours": 10},
         summary="navground's ORCA as CrowdNav's robot (its settings in CrowdNav's units: a time "
         "horizon of 5 s, 10 neighbours within 10 m, radii 0.01 m larger); for the CrowdNav "
         "families")

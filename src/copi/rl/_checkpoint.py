@@ -1,6 +1,7 @@
-"""Checkpoints of a PPO training run (:mod:`copi.rl._train`): what resumes a run exactly
-as it would have gone on, written whole (Ctrl-C held back meanwhile), and every field of
-one checked against the run's own configuration before it is trusted."""
+"""Checkpoints of a PPO or SAC training run (:mod:`copi.rl._train`): what resumes a run
+exactly as it would have gone on (SAC's: its replay buffer and entropy coefficient too),
+written whole (Ctrl-C held back meanwhile), and every field of one checked against the
+run's own configuration before it is trusted."""
 
 from __future__ import annotations
 
@@ -91,6 +92,13 @@ def _write_checkpoint(ckpt: Path, model: Any, vec: Any, config: TrainConfig,
     import torch
 
     envs = [e.state() for e in vec.envs]
+    sac: dict[str, Any] = {}
+    if config.algorithm == "sac":
+        rb = model.replay_buffer
+        n = rb.buffer_size if rb.full else rb.pos  # the rows written so far
+        sac = {"log_ent_coef": model.log_ent_coef.detach().clone(),
+               **{f"rb_{k}": torch.from_numpy(np.ascontiguousarray(getattr(rb, k)[:n]))
+                  for k in _BUFFER}}  # fmt: skip
     tensors = {
         "params": model.get_parameters(),
         "torch_rng": torch.get_rng_state(),
@@ -98,6 +106,7 @@ def _write_checkpoint(ckpt: Path, model: Any, vec: Any, config: TrainConfig,
         "episode_starts": torch.from_numpy(np.asarray(model._last_episode_starts,
                                                       dtype=np.float32).copy()),  # fmt: skip
         **{f"actions{i}": torch.from_numpy(s["actions"]) for i, s in enumerate(envs)},
+        **sac,
     }
     buffer = io.BytesIO()
     torch.save(tensors, buffer)
@@ -111,6 +120,10 @@ def _write_checkpoint(ckpt: Path, model: Any, vec: Any, config: TrainConfig,
         "envs": [{"drawn_from": s["drawn_from"], "ended": s["ended"]} for s in envs],
         "last_pt_sha256": hashlib.sha256(data).hexdigest(),
     }
+    if config.algorithm == "sac":  # where the buffer writes next; the warm-up's generator
+        meta["buffer"] = {"pos": int(model.replay_buffer.pos),
+                          "full": bool(model.replay_buffer.full)}  # fmt: skip
+        meta["action_rng"] = _json_state(model.action_space.np_random.bit_generator.state)
     if norm is not None:  # the reward's running scale (VecNormalize), as plain numbers
         meta["reward_norm"] = {"mean": float(norm.ret_rms.mean), "var": float(norm.ret_rms.var),
                                "count": float(norm.ret_rms.count),
@@ -118,6 +131,27 @@ def _write_checkpoint(ckpt: Path, model: Any, vec: Any, config: TrainConfig,
     (ckpt / "last.pt.tmp").write_bytes(data)
     os.replace(ckpt / "last.pt.tmp", ckpt / "last.pt")
     write_text(ckpt / "last.json", json.dumps(meta), "json")
+
+
+_BUFFER = ("observations", "next_observations", "actions", "rewards", "dones", "timeouts")
+"""SAC's replay buffer's arrays (Stable-Baselines3's ``ReplayBuffer``), checkpointed as
+far as they are written."""
+
+
+def _json_state(state: dict[str, Any]) -> dict[str, Any]:
+    return json.loads(json.dumps(state))
+
+
+def _is_pcg64(drawn: Any) -> bool:
+    """Whether ``drawn`` is a PCG64 generator's state (``bit_generator.state``)."""
+    state = drawn.get("state") if isinstance(drawn, dict) else None
+    return (isinstance(drawn, dict)
+            and set(drawn) == {"bit_generator", "state", "has_uint32", "uinteger"}
+            and drawn["bit_generator"] == "PCG64" and isinstance(state, dict)
+            and set(state) == {"state", "inc"}
+            and all(_is_int(v, 0, 2**128 - 1) for v in state.values())
+            and _is_int(drawn["has_uint32"], 0, 1)
+            and _is_int(drawn["uinteger"], 0, 2**32 - 1))  # fmt: skip
 
 
 def _bad(ckpt: Path, what: str) -> InvalidArgumentError:
@@ -195,11 +229,25 @@ def _check_meta(ckpt: Path, meta: dict[str, Any], config: TrainConfig) -> None:
     if not _is_int(saved_steps, 1, 10**9):
         raise refuse("config.steps", saved_steps, "the steps of a run, 1 .. 1,000,000,000")
     updates = meta.get("updates", _MISSING)
-    # PPO updates the network n_epochs times per rollout (no target_kl to stop it early)
-    want = steps // rollout * config.n_epochs
+    want = config.updates(steps)
     if not _is_int(updates, want, want):
-        raise refuse("updates", updates, f"{want:,} ({steps // rollout:,} rollouts of "
-                     f"{config.n_epochs} epochs)")  # fmt: skip
+        how = (f"{steps // rollout:,} rollouts of {config.n_epochs} epochs"
+               if config.algorithm == "ppo" else
+               f"{config.gradient_steps} a step of the environments past "
+               f"{config.learning_starts:,}")  # fmt: skip
+        raise refuse("updates", updates, f"{want:,} ({how})")
+    if config.algorithm == "sac":
+        buf = meta.get("buffer", _MISSING)
+        rows = config.buffer_size // config.envs  # the buffer's rows of one step each
+        written = steps // config.envs
+        if not (isinstance(buf, dict) and set(buf) == {"pos", "full"}
+                and isinstance(buf["full"], bool) and _is_int(buf["pos"], 0, rows - 1)
+                and buf["full"] == (written >= rows) and buf["pos"] == written % rows):  # fmt: skip
+            raise refuse("buffer", buf, f"where a buffer of {rows:,} rows writes after "
+                         f"{written:,} steps of the environments")  # fmt: skip
+        if not _is_pcg64(meta.get("action_rng", _MISSING)):
+            raise refuse("action_rng", meta.get("action_rng", _MISSING),
+                         "a PCG64 generator's state")  # fmt: skip
     seconds = meta.get("seconds", _MISSING)
     if not (_is_real(seconds) and 0 <= seconds <= YEAR):
         raise refuse("seconds", seconds, f"a wall time in 0 .. {YEAR:,} s (a year)")
@@ -234,14 +282,7 @@ def _check_meta(ckpt: Path, meta: dict[str, Any], config: TrainConfig) -> None:
         raise refuse("envs", envs, f"the states of the run's {config.envs} environments")
     for i, env in enumerate(envs):
         drawn = env.get("drawn_from", _MISSING) if isinstance(env, dict) else _MISSING
-        state = drawn.get("state") if isinstance(drawn, dict) else None
-        if not (isinstance(drawn, dict) and set(drawn) == {"bit_generator", "state",
-                                                           "has_uint32", "uinteger"}
-                and drawn["bit_generator"] == "PCG64" and isinstance(state, dict)
-                and set(state) == {"state", "inc"}
-                and all(_is_int(v, 0, 2**128 - 1) for v in state.values())
-                and _is_int(drawn["has_uint32"], 0, 1)
-                and _is_int(drawn["uinteger"], 0, 2**32 - 1)):  # fmt: skip
+        if not _is_pcg64(drawn):
             raise refuse(f"envs[{i}].drawn_from", drawn, "a PCG64 generator's state")
         ended = env.get("ended", _MISSING)
         if ended not in (None, "terminated", "truncated"):
@@ -322,8 +363,19 @@ def _read_checkpoint(ckpt: Path, config: TrainConfig) -> dict[str, Any] | None:
         raise _bad(ckpt, f"last.pt cannot be read: {type(exc).__name__}") from None
     need = {"params", "torch_rng", "last_obs", "episode_starts",
             *(f"actions{i}" for i in range(config.envs))}  # fmt: skip
+    if config.algorithm == "sac":
+        need |= {"log_ent_coef", *(f"rb_{k}" for k in _BUFFER)}
     if not isinstance(tensors, dict) or not need <= set(tensors):
         raise _bad(ckpt, "last.pt lacks parts of a checkpoint")
+    if config.algorithm == "sac":
+        buf = meta["buffer"]
+        n = config.buffer_size // config.envs if buf["full"] else buf["pos"]
+        for k in _BUFFER:
+            t = tensors[f"rb_{k}"]
+            if not (isinstance(t, torch.Tensor) and t.ndim >= 2
+                    and tuple(t.shape[:2]) == (n, config.envs)):  # fmt: skip
+                raise _bad(ckpt, f"last.pt's replay buffer {k} is not {n:,} rows of "
+                           f"{config.envs} environments")  # fmt: skip
 
     def finite(value: Any, name: str) -> None:
         if isinstance(value, dict):
@@ -362,6 +414,14 @@ def _restore(model: Any, vec: Any, saved: dict[str, Any], ckpt: Path,
         version, inner, gauss = meta["python_rng"]
         random.setstate((version, tuple(inner), gauss))
         torch.set_rng_state(tensors["torch_rng"])
+        if "log_ent_coef" in tensors:  # SAC's: its coefficient and replay buffer
+            model.log_ent_coef.data.copy_(tensors["log_ent_coef"])
+            rb = model.replay_buffer
+            for k in _BUFFER:
+                part = tensors[f"rb_{k}"].numpy()
+                getattr(rb, k)[: len(part)] = part
+            rb.pos, rb.full = int(meta["buffer"]["pos"]), bool(meta["buffer"]["full"])
+            model.action_space.np_random.bit_generator.state = meta["action_rng"]
         if norm is not None:
             saved_norm = meta["reward_norm"]
             norm.ret_rms.mean = np.float64(saved_norm["mean"])
@@ -373,6 +433,8 @@ def _restore(model: Any, vec: Any, saved: dict[str, Any], ckpt: Path,
         raise InvalidArgumentError(f"{ckpt} does not fit this run ({type(exc).__name__}: "
                                    f"{first}); use another --checkpoints directory") from None
     model._last_obs = tensors["last_obs"].numpy().copy()
+    if norm is not None:  # what SAC's buffer stores (the observation is left raw)
+        model._last_original_obs = model._last_obs.copy()
     if not np.array_equal(obs, model._last_obs):
         raise InvalidArgumentError(f"{ckpt}: its environments do not replay to the state it "
                                    "recorded; use another --checkpoints directory")  # fmt: skip

@@ -1,5 +1,5 @@
-"""The configuration of a PPO training run (:mod:`copi.rl._train`): every field decides
-the policy it learns, and each is checked before anything is trained."""
+"""The configuration of a training run (:mod:`copi.rl._train`), PPO's or SAC's: every
+field decides the policy it learns, and each is checked before anything is trained."""
 
 from __future__ import annotations
 
@@ -13,9 +13,13 @@ from copi.envs.local_policy import Reward
 from copi.errors import InvalidArgumentError
 from copi.world import check_family
 
-__all__ = ["MAX_SEED", "TrainConfig"]
+__all__ = ["ALGORITHMS", "MAX_SEED", "TrainConfig"]
 
 MAX_SEED = 2**32 - 1
+ALGORITHMS = ("ppo", "sac")
+"""Stable-Baselines3's PPO (on-policy, a Gaussian policy) and SAC (off-policy, a
+squashed Gaussian, its entropy tuned to a target)."""
+_SAC_ONLY = ("buffer_size", "learning_starts", "gradient_steps", "tau")
 
 
 @dataclass(frozen=True)
@@ -29,6 +33,8 @@ class TrainConfig:
     level's reading; the first peer, ``copi-local-v2``, mixed sensor and map)."""
     task: str = "navigation"
     """"navigation" or "chauffeur" (the evader of Experiment 2's game)."""
+    algorithm: str = "ppo"
+    """"ppo" or "sac" (:data:`ALGORITHMS`)."""
     steps: int = 2_000_000
     """Environment steps of training."""
     seed: int = 0
@@ -42,13 +48,24 @@ class TrainConfig:
     n_steps 256, batch 256, ent 0, log_std -1, net 64-64, no proximity penalty, the
     reward raw)."""
     n_steps: int = 512
-    """Steps per environment between updates."""
+    """PPO: steps per environment between updates."""
     batch_size: int = 512
+    """Transitions per gradient step (PPO's minibatch, SAC's sample of its buffer)."""
     n_epochs: int = 10
+    """PPO: passes over each rollout."""
     gamma: float = 0.99
     ent_coef: float = 0.005
+    """PPO's entropy bonus (SAC tunes its own coefficient to a target entropy)."""
     log_std: float = -0.5
     """The policy's initial log standard deviation of its actions (exploration noise)."""
+    buffer_size: int = 100_000
+    """SAC: transitions its replay buffer keeps (checkpointed whole)."""
+    learning_starts: int = 10_000
+    """SAC: steps of random actions before it learns."""
+    gradient_steps: int = 1
+    """SAC: gradient steps after each step of the ``envs`` environments."""
+    tau: float = 0.005
+    """SAC: how fast its target critics follow (Polyak)."""
     net: tuple[int, ...] = (128, 128)
     """Hidden layers of the actor (and, apart, of the critic)."""
     reward: Reward = field(default_factory=lambda: Reward(proximity=0.5))
@@ -63,11 +80,15 @@ class TrainConfig:
     VecNormalize, the observation left raw); the first peer trained without."""
 
     def __post_init__(self) -> None:
+        if self.algorithm not in ALGORITHMS:
+            raise InvalidArgumentError(f"algorithm must be one of {', '.join(ALGORITHMS)}; "
+                                       f"got {self.algorithm!r}")  # fmt: skip
         for f in self.families:
             check_family(f)
         if self.task not in ("navigation", "chauffeur"):
             raise InvalidArgumentError(f"task must be navigation or chauffeur; got {self.task!r}")
-        for key in ("steps", "envs", "n_steps", "batch_size", "n_epochs", "max_steps"):
+        for key in ("steps", "envs", "n_steps", "batch_size", "n_epochs", "max_steps",
+                    "buffer_size", "gradient_steps"):  # fmt: skip
             v = getattr(self, key)
             # a plain int: int(v) of a string, NaN or infinity would raise an error of its
             # own, and a numpy int would not go into the checkpoint's JSON
@@ -81,7 +102,16 @@ class TrainConfig:
             raise InvalidArgumentError(f"steps must be at most 1,000,000,000; got {self.steps:,}")
         if not 1 <= self.envs <= 256:
             raise InvalidArgumentError(f"envs must be in 1 .. 256; got {self.envs}")
-        for key in ("learning_rate", "gamma", "ent_coef"):
+        if not (isinstance(self.learning_starts, int) and not isinstance(self.learning_starts, bool)
+                and 0 <= self.learning_starts <= 10**9):  # fmt: skip
+            raise InvalidArgumentError(f"learning_starts must be an int >= 0; got "
+                                       f"{self.learning_starts!r}")  # fmt: skip
+        if self.buffer_size > 10_000_000:
+            raise InvalidArgumentError(
+                f"buffer_size must be at most 10,000,000 (a checkpoint holds the whole "
+                f"buffer); got {self.buffer_size:,}"
+            )
+        for key in ("learning_rate", "gamma", "ent_coef", "tau"):
             v = getattr(self, key)
             if not (isinstance(v, int | float) and math.isfinite(v) and 0 <= v <= 1):
                 raise InvalidArgumentError(f"{key} must be a number in [0, 1]; got {v!r}")
@@ -106,8 +136,18 @@ class TrainConfig:
 
     @property
     def rollout(self) -> int:
-        """Environment steps between two updates: PPO trains in whole rollouts."""
-        return self.envs * self.n_steps
+        """Environment steps between two updates: PPO trains in whole rollouts, SAC after
+        each step of its environments."""
+        return self.envs * (self.n_steps if self.algorithm == "ppo" else 1)
+
+    def updates(self, steps: int) -> int:
+        """Gradient updates after ``steps`` (whole rollouts): PPO's ``n_epochs`` a rollout
+        (no target_kl to stop it early); SAC's ``gradient_steps`` after each step of its
+        environments once past ``learning_starts``."""
+        if self.algorithm == "ppo":
+            return steps // self.rollout * self.n_epochs
+        learnt = steps // self.envs - self.learning_starts // self.envs
+        return self.gradient_steps * max(0, learnt)
 
     @property
     def planned_steps(self) -> int:
@@ -115,8 +155,13 @@ class TrainConfig:
         return -(-self.steps // self.rollout) * self.rollout
 
     def identity(self) -> dict[str, Any]:
+        """Every field (JSON-able); a PPO run's without SAC's fields, as it was before SAC
+        came (its checkpoints and policies keep their identity)."""
         d = dataclasses.asdict(self)
         d["net"] = list(self.net)
+        if self.algorithm == "ppo":
+            for key in ("algorithm", *_SAC_ONLY):
+                del d[key]
         return d
 
 

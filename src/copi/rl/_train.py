@@ -1,4 +1,4 @@
-"""PPO (Stable-Baselines3) training of a local policy in copi's episodes, with
+"""PPO or SAC (Stable-Baselines3) training of a local policy in copi's episodes, with
 checkpoints, a learning curve on fixed validation episodes, and the export of the actor
 to numpy weights (:func:`copi.baselines.save_policy`).
 
@@ -77,14 +77,18 @@ def _need_rl() -> None:
 def export_policy(model: Any, n_rays: int = 32, max_range: float = 10.0,
                   info: dict[str, Any] | None = None,
                   config: TrainConfig | None = None) -> PolicyWeights:  # fmt: skip
-    """The actor of a Stable-Baselines3 PPO ``MlpPolicy`` (tanh) as numpy weights: the
-    policy network's linear layers, then the action network; what it sees as ``config``
-    says (``copi-local-v2`` without one)."""
+    """The actor of a Stable-Baselines3 PPO or SAC ``MlpPolicy`` (tanh) as numpy weights:
+    the policy network's linear layers, then the action network (PPO's mean, clipped; SAC's
+    mean, squashed by tanh); what it sees as ``config`` says (``copi-local-v2`` without
+    one)."""
     import torch
 
     policy = model.policy
+    sac = hasattr(policy, "actor")
+    modules = [*policy.actor.latent_pi, policy.actor.mu] if sac else \
+        [*policy.mlp_extractor.policy_net, policy.action_net]  # fmt: skip
     layers = []
-    for module in [*policy.mlp_extractor.policy_net, policy.action_net]:
+    for module in modules:
         if isinstance(module, torch.nn.Linear):
             w = module.weight.detach().cpu().numpy().astype(np.float64)
             b = module.bias.detach().cpu().numpy().astype(np.float64)
@@ -92,11 +96,12 @@ def export_policy(model: Any, n_rays: int = 32, max_range: float = 10.0,
         elif not isinstance(module, torch.nn.Tanh):
             raise InvalidArgumentError(f"cannot export a {type(module).__name__} layer (tanh "
                                        "MLPs only)")  # fmt: skip
+    output = "tanh" if sac else "clip"
     if config is None or config.observation == OBSERVATION:
-        return PolicyWeights(tuple(layers), n_rays, max_range, info or {})
+        return PolicyWeights(tuple(layers), n_rays, max_range, info or {}, output=output)
     level = "map" if config.task == "chauffeur" else config.levels[0]
     return PolicyWeights(tuple(layers), n_rays, max_range, info or {}, config.observation,
-                         level, config.frames)  # fmt: skip
+                         level, config.frames, output)  # fmt: skip
 
 
 def validation_success(
@@ -137,7 +142,7 @@ def train(
     command: str = "",
     keep: str = "best",
 ) -> dict[str, Any]:
-    """Train PPO as ``config`` says and write the exported policy to ``output`` (and
+    """Train PPO or SAC as ``config`` says and write the exported policy to ``output`` (and
     ``output`` with ``.json`` and ``.png``: the learning curve). With ``checkpoints``, the
     model is saved there every ``validate_every`` steps (weights and optimiser state as
     torch tensors, loaded with ``weights_only``: no pickle), and a rerun resumes from the
@@ -151,7 +156,7 @@ def train(
     check_apart(output, checkpoints)
     _need_rl()
     import torch
-    from stable_baselines3 import PPO
+    from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.callbacks import BaseCallback
     from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
 
@@ -175,14 +180,25 @@ def train(
     # is left as it is: the exported policy reads it raw)
     norm = VecNormalize(vec, norm_obs=False, norm_reward=True, gamma=config.gamma) \
         if config.normalize_reward else None  # fmt: skip
-    model = PPO(
-        "MlpPolicy", vec if norm is None else norm, learning_rate=config.learning_rate,
-        n_steps=config.n_steps,
-        batch_size=config.batch_size, n_epochs=config.n_epochs, gamma=config.gamma,
-        ent_coef=config.ent_coef, seed=config.seed, device="cpu", verbose=0,
-        policy_kwargs={"net_arch": {"pi": list(config.net), "vf": list(config.net)},
-                       "activation_fn": torch.nn.Tanh, "log_std_init": config.log_std},
-    )  # fmt: skip
+    env = vec if norm is None else norm
+    if config.algorithm == "sac":
+        model: Any = SAC(
+            "MlpPolicy", env, learning_rate=config.learning_rate,
+            buffer_size=config.buffer_size, learning_starts=config.learning_starts,
+            batch_size=config.batch_size, tau=config.tau, gamma=config.gamma, train_freq=1,
+            gradient_steps=config.gradient_steps, ent_coef="auto", seed=config.seed,
+            device="cpu", verbose=0,
+            policy_kwargs={"net_arch": {"pi": list(config.net), "qf": list(config.net)},
+                           "activation_fn": torch.nn.Tanh, "log_std_init": config.log_std},
+        )  # fmt: skip
+    else:
+        model = PPO(
+            "MlpPolicy", env, learning_rate=config.learning_rate, n_steps=config.n_steps,
+            batch_size=config.batch_size, n_epochs=config.n_epochs, gamma=config.gamma,
+            ent_coef=config.ent_coef, seed=config.seed, device="cpu", verbose=0,
+            policy_kwargs={"net_arch": {"pi": list(config.net), "vf": list(config.net)},
+                           "activation_fn": torch.nn.Tanh, "log_std_init": config.log_std},
+        )  # fmt: skip
     curve: list[dict[str, float]] = []
     best: PolicyWeights | None = None  # the best validation's (its success in its info)
     elapsed0 = 0.0
@@ -204,14 +220,16 @@ def train(
 
     t0 = time.perf_counter()
 
+    name = {"ppo": "PPO", "sac": "SAC"}[config.algorithm]
+
     def snapshot() -> PolicyWeights:
-        return export_policy(model, info={"algorithm": "PPO", **config.identity()},
+        return export_policy(model, info={"algorithm": name, **config.identity()},
                              config=config)  # fmt: skip
 
     class Watch(BaseCallback):  # type: ignore[misc]
         """Progress at every step; validation (and a checkpoint) between rollouts, where
-        the rollout buffer is empty, so that a resumed run goes on exactly as it would
-        have."""
+        PPO's rollout buffer is empty (SAC's: after a step's gradient updates), so that a
+        resumed run goes on exactly as it would have."""
 
         def __init__(self) -> None:
             super().__init__()
@@ -268,7 +286,7 @@ def train(
         "config": config.identity(),
         "command": command,
     }
-    policy = export_policy(model, info={"algorithm": "PPO (Stable-Baselines3)",
+    policy = export_policy(model, info={"algorithm": f"{name} (Stable-Baselines3)",
                                         "steps_per_second": summary["steps_per_second"],
                                         "seconds": summary["seconds"], "command": command,
                                         **config.identity()}, config=config)  # fmt: skip
@@ -280,7 +298,8 @@ def train(
                                {**policy.info, "validation_success":
                                 best.info["validation_success"],
                                 "kept_steps": best.info["kept_steps"]},
-                               policy.observation, policy.level, policy.frames)  # fmt: skip
+                               policy.observation, policy.level, policy.frames,
+                               policy.output)  # fmt: skip
     policy.info["kept"] = keep
     summary["kept_steps"] = policy.info["kept_steps"]
     summary["kept_success"] = policy.info["validation_success"]

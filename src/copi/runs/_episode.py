@@ -280,7 +280,13 @@ def run_episode(
         raise _broke(agent, "reset", exc) from None
     steer = GlobalDirection.of(agent, task)
     prev_centers = sim.centers.copy()
-    velocities = sim.speed * np.column_stack([np.cos(sim.headings), np.sin(sim.headings)])
+    # what an oracle is told of the discs' motion before any step: a random walk's
+    # heading at its speed; a crowd's own velocities (at rest, as CrowdNav's humans start)
+    velocities = (
+        sim.crowd.velocities()
+        if sim.crowd is not None
+        else sim.speed * np.column_stack([np.cos(sim.headings), np.sin(sim.headings)])
+    )
     length = 0.0
     contacts = 0
     no_policy = 0

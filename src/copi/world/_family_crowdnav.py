@@ -16,9 +16,10 @@ the centre, a start drawn again while it is nearer than 0.8 m (two radii and the
 discomfort distance) to an earlier agent's start or goal; in square crossing each human
 starts on one side of the y axis and has its goal on the other, uniform in a 10 m
 square, drawn again while nearer than 0.8 m to another's start (or goal). Humans' ORCA:
-time horizon 5 s, 10 neighbours, a radius 0.01 m larger than theirs, speed 1 m/s; the
-robot is invisible to them; a human at its goal stays there. Success is the robot
-within its radius (0.3 m) of its goal; the episode ends at 24 s (96 decisions).
+time horizon 5 s, the 10 nearest neighbours within 10 m, a radius 0.01 m larger than
+theirs, speed 1 m/s; the robot is invisible to them; a human at its goal stays there.
+Success is the robot within its radius (0.3 m) of its goal; the episode ends at 24 s (96
+decisions).
 
 What differs, said plainly: CrowdNav draws its 500 test episodes from numpy's legacy
 generator seeded 1000 + i; copi draws episode k from ``default_rng([seed, k])`` (the
@@ -56,6 +57,7 @@ class CrowdNavSettings:
     """ORCA's (``crowd_sim/envs/policy/orca.py``), seconds."""
     max_neighbors: int = 10
     neighbor_dist: float = 10.0
+    """How far ORCA sees the others, metres (RVO2's neighbour distance)."""
     radius_extra: float = 0.01
     """ORCA sees every agent 0.01 m larger than it is (so two, 0.02 m farther apart:
     navground's safety margin, added once to the sum of radii, is twice this)."""
@@ -74,7 +76,8 @@ def _spec(starts: list[np.ndarray], goals: list[np.ndarray]) -> ObstacleSpec:
         count=(len(starts), len(starts)), radius=(c.radius * s, c.radius * s),
         speed=c.v_pref * c.time_step * s,
         behaviour="orca", sees_agent=False, time_horizon=c.time_horizon / c.time_step,
-        safety_margin=2 * c.radius_extra * s, neighbours=c.max_neighbors, new_goals=False,
+        safety_margin=2 * c.radius_extra * s, neighbours=c.max_neighbors,
+        sight=c.neighbor_dist * s, new_goals=False,
         positions=tuple(tuple(p * s) for p in starts), goals=tuple(tuple(g * s) for g in goals),
     )  # fmt: skip
 

@@ -33,10 +33,11 @@ def navground_available() -> bool:
 class ReactiveCrowd:
     """The moving discs of one episode as a navground world: each disc an agent with the
     behaviour of ``spec`` (its preferred speed ``spec.speed``, its time horizon, safety
-    margin and neighbours), its radius, a goal, and the world's walls. One :meth:`step`
-    is one time step of copi's (navground's time unit is copi's step, its lengths agent
-    steps). A disc within its radius of its goal is given a new one (drawn by the episode's
-    generator, in the free space) when ``spec.new_goals``; else it stays there.
+    margin, neighbours and how far it sees them), its radius, a goal, and the world's
+    walls. One :meth:`step` is one time step of copi's (navground's time unit is copi's
+    step, its lengths agent steps). A disc within its radius of its goal is given a new
+    one (drawn by the episode's generator, in the free space) when ``spec.new_goals``;
+    else it stays there.
 
     With ``spec.sees_agent`` the copi agent is in the crowd's world as a disc with no
     behaviour, put where the agent is (and moving as it moves) before each step, so that
@@ -97,11 +98,14 @@ class ReactiveCrowd:
                 b.time_horizon = spec.time_horizon
             if spec.behaviour in ("orca", "hrvo"):
                 b.set("max_neighbors", int(spec.neighbours))
+            if spec.behaviour == "orca":  # its neighbour distance is twice its horizon
+                b.horizon = spec.sight / 2
             a = sim.Agent(
                 radius=float(r), behavior=b,
                 kinematics=core.kinematics.OmnidirectionalKinematics(max_speed=spec.speed),
                 task=self._task(self.goals[k], float(r)),
-                state_estimations=[sim.state_estimations.BoundedStateEstimation(range=10.0)],
+                state_estimations=[sim.state_estimations.BoundedStateEstimation(
+                    range=spec.sight)],
                 id=k,
             )  # fmt: skip
             a.position = np.asarray(c, dtype=np.float64)

@@ -99,6 +99,9 @@ class ObstacleSpec:
     """Room a crowd behaviour keeps beyond the sum of radii, agent steps."""
     neighbours: int = 10
     """Most neighbours a crowd behaviour considers, the nearest first."""
+    sight: float = 10.0
+    """How far a crowd behaviour sees the others, agent steps (navground's state
+    estimation range; for ORCA also its neighbour distance)."""
     new_goals: bool = True
     """A disc at its goal is given another (drawn in the free space); otherwise it stays."""
     positions: tuple[tuple[float, float], ...] | None = None
@@ -133,12 +136,14 @@ class ObstacleSpec:
             if not isinstance(getattr(self, key), bool):
                 raise InvalidWorldError(f"obstacles.{key} must be true or false; got "
                                         f"{getattr(self, key)!r}")  # fmt: skip
-        for key, most in (("time_horizon", 1000.0), ("safety_margin", 100.0)):
+        for key, most in (("time_horizon", 1000.0), ("safety_margin", 100.0),
+                          ("sight", 1000.0)):  # fmt: skip
             v = getattr(self, key)
             ok = isinstance(v, int | float) and not isinstance(v, bool) and np.isfinite(v)
-            if not ok or not (0 < v <= most if key == "time_horizon" else 0 <= v <= most):
+            low = key == "safety_margin"  # 0 allowed
+            if not ok or not (0 <= v <= most if low else 0 < v <= most):
                 raise InvalidWorldError(f"obstacles.{key} must be a number in "
-                                        f"{'(0' if key == 'time_horizon' else '[0'}, {most:g}]; "
+                                        f"{'[0' if low else '(0'}, {most:g}]; "
                                         f"got {v!r}")  # fmt: skip
             object.__setattr__(self, key, float(v))
         n = self.neighbours
@@ -176,7 +181,7 @@ class ObstacleSpec:
         """From the JSON form ``{"count": 12, "radius": 0.75, "speed": 0.6}`` (all optional;
         count and radius may be [low, high] pairs), with, for a crowd, ``"behaviour":
         "orca"`` and its settings (``sees_agent``, ``time_horizon``, ``safety_margin``,
-        ``neighbours``, ``new_goals``, ``positions``, ``goals``)."""
+        ``neighbours``, ``sight``, ``new_goals``, ``positions``, ``goals``)."""
         if not isinstance(data, dict):
             raise InvalidWorldError(f"obstacles must be an object; got {type(data).__name__}")
         keys = [f.name for f in dataclasses.fields(cls)]

@@ -27,6 +27,7 @@ import dataclasses
 import gc
 import hashlib
 import json
+import math
 import os
 import sys
 import tempfile
@@ -129,6 +130,39 @@ def env_rate(agents: int, steps: int = 10) -> float:
     return steps / (time.perf_counter() - t0)
 
 
+def _spin(n: int) -> float:
+    """A second or so of pure arithmetic (numba, no memory traffic)."""
+    from numba import njit
+
+    @njit(cache=False)
+    def work(n: int) -> float:
+        acc = 0.0
+        for k in range(n):
+            acc += math.sin(k * 1e-3)
+        return acc
+
+    return float(work(n))
+
+
+def core_scaling(processes: int, n: int = 30_000_000) -> float:
+    """How much more arithmetic ``processes`` processes do in the same time than one
+    (``processes`` on ideal cores; less where the cores share a physical one, or the
+    machine is shared): the ceiling of any speed-up copi's processes can give here."""
+    import multiprocessing
+
+    _spin(1000)  # compiled in this process, before the fork
+    t0 = time.perf_counter()
+    _spin(n)
+    one = time.perf_counter() - t0
+    ctx = multiprocessing.get_context("fork")
+    with ctx.Pool(processes) as pool:
+        pool.map(_spin, [1000] * processes)  # each worker compiles first
+        t0 = time.perf_counter()
+        pool.map(_spin, [n] * processes)
+        many = time.perf_counter() - t0
+    return processes * one / many
+
+
 def bytes_per_agent(config: CrowdConfig) -> float:
     """Peak memory (numpy and Python allocations, tracemalloc) of drawing a crowd and
     running 3 steps in this process, over N."""
@@ -166,6 +200,7 @@ def measure(
         "navground_steps_per_s": float(np.median(ng)),
         "bytes_per_agent": bytes_per_agent(config),
         "env_steps_per_s": env_rate(agents),
+        "core_scaling": core_scaling(cores) if cores > 1 else 1.0,
     }  # fmt: skip
     out["ratio"] = out["copi_steps_per_s"] / out["navground_steps_per_s"]
     return out
@@ -199,9 +234,13 @@ def main(sizes: tuple[int, ...] = (1000, 10_000), caps: str | None = None) -> bo
                       f"{r['bytes_per_agent']:,.0f}"])  # fmt: skip
     show("crowd: world steps a second, copi against navground's ORCA (same run)",
          ["agents", "copi", "navground ORCA", "× navground", "goal", "bytes per agent"], cells)
+    scale = found[0]["core_scaling"]
     note(f"Density {DENSITY:g} agents per square agent step, steady crowds; medians of 3 "
          "alternating runs; memory is the peak tracemalloc sees over drawing a crowd and "
-         "running 3 steps, per agent.")  # fmt: skip
+         "running 3 steps, per agent. This machine's cores: "
+         f"{found[0]['processes']} processes do {scale:.2f}x the arithmetic of one in the "
+         "same time (pure compute, no memory traffic): the ceiling of any speed-up from "
+         "processes here.")  # fmt: skip
     return ok
 
 
@@ -230,7 +269,8 @@ def _cli() -> int:
                   f"({r['processes']} processes; {r['copi_one_process_steps_per_s']:,.1f} on one), "
                   f"navground ORCA {r['navground_steps_per_s']:,.1f} ({r['ratio']:.1f}x); "
                   f"{r['bytes_per_agent']:,.0f} bytes per agent; the PettingZoo env "
-                  f"{r['env_steps_per_s']:,.1f}")  # fmt: skip
+                  f"{r['env_steps_per_s']:,.1f}; {r['processes']} processes do "
+                  f"{r['core_scaling']:.2f}x one's arithmetic here")  # fmt: skip
     return 0
 
 

@@ -54,12 +54,28 @@ from copi.rl import TrainConfig, validation_success  # noqa: E402
 from studies._common import kept_times  # noqa: E402
 
 FAMILIES = ("star", "polygon", "indoor", "maps", "crowd")
+
+
+def method_spec_available(name: str) -> bool:
+    """Whether method ``name`` is registered and can run here (its weights shipped)."""
+    from copi.errors import InvalidArgumentError
+
+    try:
+        return method_spec(name).available()
+    except InvalidArgumentError:  # not registered
+        return False
+
+
+SAC_FAMILIES = tuple(f for f in FAMILIES if method_spec_available(f"sac-{f}-map"))
+"""The families SAC was trained on (its policies shipped)."""
 METHODS = ["copi-learnt", "compass-guard", "dwa", "straight", "ppo", "ppo-guard",
            *[f"ppo-{f}" for f in FAMILIES], "copi-predictive@map",
-           *[f"ppo-{f}-map" for f in FAMILIES], *[f"ppo-guard-{f}-map" for f in FAMILIES]]
-"""The first peer (``ppo``, ``ppo-F``: the ranges and their change, sensor and map mixed)
-and the second (``ppo-F-map``: map's reading, one policy per level), each beside the copi
-method that, like it, has or has not a hand-written guard."""
+           *[f"ppo-{f}-map" for f in FAMILIES], *[f"ppo-guard-{f}-map" for f in FAMILIES],
+           *[f"sac-{f}-map" for f in SAC_FAMILIES]]
+"""The first peer (``ppo``, ``ppo-F``: the ranges and their change, sensor and map mixed),
+the second (``ppo-F-map``: map's reading, one policy per level) and the second algorithm
+(``sac-F-map``: the same observation, learnt by SAC), each beside the copi method that,
+like it, has or has not a hand-written guard."""
 GOAL_TO_GUARD = {"star": -5, "maps": -5, "polygon": -10, "indoor": -10, "crowd": 0}
 """How far below compass-guard the second peer may stand in each family (points) and
 still count as a peer that learnt (the bar set before it was trained)."""
@@ -181,6 +197,61 @@ def second_peer_lines(succ: dict, rate: dict) -> list[str]:
     return [*lines, ""]
 
 
+def sac_lines(succ: dict, rate: dict, out: Path) -> list[str]:
+    """The second algorithm's section: SAC beside PPO on the same observation, both beside
+    straight, compass-guard and copi-predictive, on the same episodes."""
+    rows = []
+    for fam in SAC_FAMILIES:
+        sac, ppo = f"sac-{fam}-map", f"ppo-{fam}-map"
+        arms = {k: succ.get((fam, k, "map")) for k in (sac, ppo, "straight", "compass-guard",
+                                                         "copi-predictive")}  # fmt: skip
+        if any(v is None for v in arms.values()):
+            continue
+        info = json.loads((out / f"sac-{fam}-map-s0.json").read_text()) \
+            if (out / f"sac-{fam}-map-s0.json").is_file() else {}  # fmt: skip
+        gap_st = 100 * (rate[fam, sac, "map"] - rate[fam, "straight", "map"])
+        gap_cg = 100 * (rate[fam, sac, "map"] - rate[fam, "compass-guard", "map"])
+        ok = gap_st >= 30 and gap_cg >= GOAL_TO_GUARD[fam]
+        took = f"{info['steps']:,} in {info['seconds'] / 60:.0f} min" if info else "—"
+        rows.append(
+            f"| {fam} | {_pct(rate[fam, 'straight', 'map'])} | "
+            f"{_pct(rate[fam, 'compass-guard', 'map'])} | "
+            f"{_pct(rate[fam, 'copi-predictive', 'map'])} | {_pct(rate[fam, ppo, 'map'])} | "
+            f"{_pct(rate[fam, sac, 'map'])} | {_compare(arms[sac], arms[ppo], sac, ppo)[0]} | "
+            f"{_compare(arms['copi-predictive'], arms[sac], 'copi-predictive', sac)[0]} | "
+            f"{_compare(arms[sac], arms['straight'], '', '')[0]} | {took} | "
+            f"{'met' if ok else '**missed**'} |"
+        )
+    if not rows:
+        return []
+    return [
+        "## The second algorithm: SAC (level map)",
+        "",
+        "`sac-F-map`: SAC (Stable-Baselines3; off-policy, a replay buffer of 100k "
+        "transitions, its entropy tuned to a target, batches of 256, one gradient step "
+        "after each step of its 8 environments, 10k random steps first) on family F at "
+        "level map, seeing what `ppo-F-map` sees and rewarded alike "
+        "(`python studies/rl_train_all.py --peer sac --only F-map --seeds 0`; not tuned: "
+        "SB3's settings for SAC beside copi rl train's). Nothing hand-written. Trained on "
+        "the families the table shows; the others were not trained.",
+        "",
+        "| family | straight | compass-guard | copi-predictive | ppo-F-map | sac-F-map | "
+        "Δ sac − ppo | Δ copi-predictive − sac | Δ sac − straight | steps | learnt (goal) |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
+        *rows,
+        "",
+        "The goal is the second peer's (at least 30 points above straight; within 5 points "
+        "of compass-guard in star, at or above it in crowd).",
+        "",
+        *[f"![sac-{f}-map](rl-curve-sac-{f}-map.png)" for f in SAC_FAMILIES
+          if (DOCS / f"rl-curve-sac-{f}-map.png").is_file()],
+        "",
+    ]
+
+
+DOCS = Path(__file__).resolve().parents[1] / "docs"
+
+
 def tuning_lines(out: Path) -> list[str]:
     """The second peer's tuning table, from the runs of ``rl_train_all.py --tune`` in
     ``out`` (absent runs are left out)."""
@@ -263,11 +334,10 @@ def _seed_policies() -> dict[str, tuple[str, int]]:
     out = {}
     for path in sorted(SEEDS.glob("ppo-*-s*.npz")):
         config, seed = path.stem.removeprefix("ppo-").rsplit("-s", 1)
-
-        def make(*, weights: str = str(path)) -> PPOAgent:  # no guard: played as trained
-            return PPOAgent(weights=weights)
-
-        register_method(path.stem, make, summary=f"PPO ({config}), training seed {seed}",
+        # copi's own PPOAgent (no guard: played as trained), so that the identity of its
+        # runs is its weights and parameters, not this script's code
+        register_method(path.stem, PPOAgent, params={"weights": str(path), "guard": 0.0},
+                        summary=f"PPO ({config}), training seed {seed}",
                         inputs=lambda p=path: {"weights_sha": file_sha(p)},
                         replace=True)  # fmt: skip
         out[path.stem] = (config, int(seed))
@@ -437,6 +507,7 @@ def main() -> None:
         "",
         *second_peer_lines(succ, rate),
         *tuning_lines(Path(a.policies)),
+        *sac_lines(succ, rate, Path(a.policies)),
         "## The first peer, in family (level map, then sensor)",
         "",
         "copi-learnt: the learnt preset's capabilities, learnt once without any task (their "

@@ -1,7 +1,9 @@
-"""Train every PPO policy copi reports, two at a time (one per core), resumably.
+"""Train every deep-RL policy copi reports, two at a time (one per core), resumably.
 
     python studies/rl_train_all.py --steps 2000000 --seeds 0 --out results/rl --install
     python studies/rl_train_all.py --peer first --steps 2000000 --seeds 0 --install
+    python studies/rl_train_all.py --peer sac --only star-map,crowd-map --steps 1000000 \
+        --seeds 0 --install
 
 Two peers. The second (the default, ``--peer second``): one policy per family at level
 ``map``, seeing what that level gives (``copi-local-v3``: the hits the static map does
@@ -11,6 +13,9 @@ the setting chosen by ``--tune`` (the settings of :data:`TUNING_SECOND` on star 
 ranges and their change, the same at every level) on a mix of sensor and map episodes;
 configurations ``mix`` (all five families), one per family and ``chauffeur`` (the game's
 evader), with :data:`TUNING`'s ``lr1e-3``.
+
+The third (``--peer sac``): the second's observation and reward, learnt by SAC
+(:data:`SAC`), policies ``sac-F-map``.
 
 Each run is ``copi rl train`` with checkpoints, so an interrupted script resumes. The
 seed-0 policies are then copied into ``src/copi/data/rl`` by ``--install``, the other
@@ -67,6 +72,10 @@ defaults (lr 3e-4, 8 envs x 512 steps, batches of 512, entropy 0.005, log std -0
 128-128 tanh layers, 3 readings, proximity penalty 0.5, contact 10, the reward scaled by
 its running spread), then one change each: the raw reward, no proximity penalty, 2 or 5
 readings, a contact cost of 30, wider layers, and the first peer's settings."""
+SAC = ["--algo", "sac", "--batch-size", "256"]
+"""The SAC peer's settings beside copi rl train's defaults (8 environments, one gradient
+step after each step of them, a buffer of 100k transitions, 10k random steps first):
+SB3's batch of 256."""
 SHIPPED = Path(__file__).resolve().parents[1] / "src" / "copi" / "data" / "rl"
 DOCS = Path(__file__).resolve().parents[1] / "docs"
 
@@ -93,7 +102,7 @@ def main() -> None:
     ap.add_argument("--out", default="results/rl")
     ap.add_argument("--only", default=None, help="comma-separated configurations")
     ap.add_argument("--tune", action="store_true", help="the settings (seed 0)")
-    ap.add_argument("--peer", choices=("first", "second"), default="second")
+    ap.add_argument("--peer", choices=("first", "second", "sac"), default="second")
     # chosen by --tune (400k steps on the mix, validation seed 1: the highest mean of the
     # last three points of the learning curve; docs/rl.md has the table)
     ap.add_argument("--setting", default="lr1e-3", help="the setting of every run")
@@ -111,9 +120,10 @@ def main() -> None:
     elif a.tune:
         jobs = [(f"tune-{k}", [*CONFIGS["mix"], *FIRST, *v, "--seed", "0"])
                 for k, v in TUNING.items()]  # fmt: skip
-    elif second:
+    elif second or a.peer == "sac":
         names = a.only.split(",") if a.only else list(SECOND)
-        jobs = [(f"ppo-{name}-s{seed}", [*SECOND[name], "--seed", seed])
+        algo, extra = ("ppo", []) if second else ("sac", SAC)
+        jobs = [(f"{algo}-{name}-s{seed}", [*SECOND[name], *extra, "--seed", seed])
                 for seed in a.seeds.split(",") for name in names]  # fmt: skip
     else:
         names = a.only.split(",") if a.only else list(CONFIGS)
@@ -131,10 +141,11 @@ def main() -> None:
         print(f"{name}: {r['steps']:,} steps, {r['seconds']:.0f} s ({r['steps_per_second']:,.0f}"
               f"/s), validation success {100 * last['success']:.1f} %")
     if a.install:
-        _install(out, list(SECOND) if second else list(CONFIGS))
+        _install(out, list(SECOND) if a.peer != "first" else list(CONFIGS),
+                 "ppo" if a.peer != "sac" else "sac")  # fmt: skip
 
 
-def _install(out: Path, configs: list[str]) -> None:
+def _install(out: Path, configs: list[str], algo: str = "ppo") -> None:
     """Ship the seed-0 policies, their commands told as run from the repository with
     ``--out results/rl`` (the directory of this machine's run is nobody else's)."""
     from copi.baselines import load_policy, save_policy
@@ -142,20 +153,21 @@ def _install(out: Path, configs: list[str]) -> None:
     SHIPPED.mkdir(parents=True, exist_ok=True)
     prefix = str(out).rstrip("/") + "/"
     for name in configs:
-        src = out / f"ppo-{name}-s0.npz"
+        src = out / f"{algo}-{name}-s0.npz"
         if not src.is_file():
             continue
         policy = load_policy(src)
         policy.info["command"] = policy.info.get("command", "").replace(prefix, "results/rl/")
-        save_policy(policy, SHIPPED / f"ppo-{name}.npz")
-        summary = json.loads((out / f"ppo-{name}-s0.json").read_text())
+        save_policy(policy, SHIPPED / f"{algo}-{name}.npz")
+        summary = json.loads((out / f"{algo}-{name}-s0.json").read_text())
         summary["command"] = summary.get("command", "").replace(prefix, "results/rl/")
-        (SHIPPED / f"ppo-{name}.json").write_text(json.dumps(summary, indent=1) + "\n")
-        shutil.copy(out / f"ppo-{name}-s0.png", DOCS / f"rl-curve-{name}.png")
+        (SHIPPED / f"{algo}-{name}.json").write_text(json.dumps(summary, indent=1) + "\n")
+        figure = f"rl-curve-{name}.png" if algo == "ppo" else f"rl-curve-{algo}-{name}.png"
+        shutil.copy(out / f"{algo}-{name}-s0.png", DOCS / figure)
     # the other seeds' policies: the spread over training seeds (rl_experiments)
     (SHIPPED / "seeds").mkdir(exist_ok=True)
-    for src in sorted(out.glob("ppo-*-s*.npz")):
-        name, seed = src.stem.removeprefix("ppo-").rsplit("-s", 1)
+    for src in sorted(out.glob(f"{algo}-*-s*.npz")):
+        name, seed = src.stem.removeprefix(f"{algo}-").rsplit("-s", 1)
         if seed == "0" or name not in configs or not (out / f"{src.stem}.json").is_file():
             continue
         policy = load_policy(src)

@@ -155,7 +155,11 @@ def kernel_net(net: NDArray[np.float64]) -> NDArray[np.float64]:
 def safety_of(net_t, k, shift, feat, n):  # type: ignore[no-untyped-def]
     """P(safe) by network ``k`` of ``net_t`` (:func:`kernel_net`; 0: a move along ray 0,
     1: waiting) of the features in ``feat`` (:func:`ring_features`) turned by ``shift``
-    rays. No fastmath: every sum runs in the order written, the same on every processor."""
+    rays. No fastmath: every sum runs in the order written, the same on every processor.
+    A feature of exactly 0 (a ray that did not change, did not come nearer, or whose hit
+    the static map explains: a third of them or more) is skipped: adding its products,
+    each +-0, leaves every sum as it is (a -0 sum may become +0, which neither the ReLU
+    nor any later sum tells apart), so the probability is the same, bit for bit."""
     h = net_t.shape[2]
     last = net_t.shape[1] - 2
     z = net_t[k, 0].copy()
@@ -164,6 +168,8 @@ def safety_of(net_t, k, shift, feat, n):  # type: ignore[no-untyped-def]
         f0 = 2 * b * n + shift
         for j in range(n):
             f = feat[f0 + j]
+            if f == 0.0:
+                continue
             row = net_t[k, w0 + j]
             for u in range(h):
                 z[u] += row[u] * f

@@ -57,6 +57,10 @@ _RL_POLICIES = [
        "hand-written") for f in ("star", "polygon", "indoor", "maps", "crowd")],
     *[(f"ppo-guard-{f}-map", f"ppo-{f}-map", 1.05, f"ppo-{f}-map shielded by compass-guard's "
        "hand-written guard") for f in ("star", "polygon", "indoor", "maps", "crowd")],
+    # the second algorithm, where it was trained (docs/rl.md)
+    *[(f"sac-{f}-map", f"sac-{f}-map", 0.0, f"SAC trained on the {f} family at map, seeing "
+       f"what ppo-{f}-map sees (copi-local-v3); nothing hand-written")
+      for f in ("star", "crowd")],
 ]  # fmt: skip
 
 
@@ -152,7 +156,8 @@ def _register_builtins() -> None:
             available=_weights_present(weights), inputs=_weights_hash(weights),
             params={"weights": weights, "guard": guard}, summary=summary,
             missing=f"its trained weights {weights}.npz, which copi does not ship here: train "
-            f"them with copi rl train -o {weights}.npz (docs: copi against deep RL)")
+            f"them with copi rl train{' --algo sac' if name.startswith('sac') else ''} -o "
+            f"{weights}.npz (docs: copi against deep RL)")
     # Bounds, not methods: what is possible (marked so in every table and figure).
     reg("clairvoyant", Clairvoyant, sensing="future", default=True, bound=True,
         summary="a bound: space-time A* on the obstacles' recorded future (they ignore the "

@@ -19,7 +19,11 @@ velocity, the robot at its new one) passing within two radii; success is the rob
 position within its radius of its goal; the episode ends at 24 s (timeout checked first).
 
 What differs: the ORCA solver is navground's copy of RVO2's agent (the one copi's humans
-and its ``crowdnav-orca`` use), not Python-RVO2; a solver built for each decision.
+and its ``crowdnav-orca`` use), not Python-RVO2; a solver built for each decision; and
+navground caps an agent's speed at that of its preferred velocity where RVO2 caps it at 1
+m/s, so that within 1 m of its goal an agent here cannot move aside faster than the
+preferred velocity's length (a difference this loop shares with copi's scenario, so it
+cannot reveal it).
 ``--human-sight`` changes how far the humans see each other (10 m is CrowdNav's).
 """
 

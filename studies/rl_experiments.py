@@ -197,7 +197,7 @@ def second_peer_lines(succ: dict, rate: dict) -> list[str]:
     return [*lines, ""]
 
 
-def sac_lines(succ: dict, rate: dict, out: Path) -> list[str]:
+def sac_lines(succ: dict, rate: dict) -> list[str]:
     """The second algorithm's section: SAC beside PPO on the same observation, both beside
     straight, compass-guard and copi-predictive, on the same episodes."""
     rows = []
@@ -207,8 +207,8 @@ def sac_lines(succ: dict, rate: dict, out: Path) -> list[str]:
                                                          "copi-predictive")}  # fmt: skip
         if any(v is None for v in arms.values()):
             continue
-        info = json.loads((out / f"sac-{fam}-map-s0.json").read_text()) \
-            if (out / f"sac-{fam}-map-s0.json").is_file() else {}  # fmt: skip
+        shipped = SEEDS.parent / f"sac-{fam}-map.json"  # what trained the shipped policy
+        info = json.loads(shipped.read_text()) if shipped.is_file() else {}
         gap_st = 100 * (rate[fam, sac, "map"] - rate[fam, "straight", "map"])
         gap_cg = 100 * (rate[fam, sac, "map"] - rate[fam, "compass-guard", "map"])
         ok = gap_st >= 30 and gap_cg >= GOAL_TO_GUARD[fam]
@@ -336,7 +336,8 @@ def _seed_policies() -> dict[str, tuple[str, int]]:
         config, seed = path.stem.removeprefix("ppo-").rsplit("-s", 1)
         # copi's own PPOAgent (no guard: played as trained), so that the identity of its
         # runs is its weights and parameters, not this script's code
-        register_method(path.stem, PPOAgent, params={"weights": str(path), "guard": 0.0},
+        register_method(path.stem, PPOAgent, params={"weights": f"seeds/{path.stem}",
+                                                     "guard": 0.0},
                         summary=f"PPO ({config}), training seed {seed}",
                         inputs=lambda p=path: {"weights_sha": file_sha(p)},
                         replace=True)  # fmt: skip
@@ -507,7 +508,7 @@ def main() -> None:
         "",
         *second_peer_lines(succ, rate),
         *tuning_lines(Path(a.policies)),
-        *sac_lines(succ, rate, Path(a.policies)),
+        *sac_lines(succ, rate),
         "## The first peer, in family (level map, then sensor)",
         "",
         "copi-learnt: the learnt preset's capabilities, learnt once without any task (their "

@@ -112,6 +112,8 @@ def main() -> None:
     out = Path(a.out)
     jobs: list[tuple[str, list[str]]] = []
     second = a.peer == "second"
+    if a.tune and a.peer == "sac":
+        ap.error("--tune tries PPO's settings (--peer first or second); SAC is not tuned")
     if a.tune and second:
         jobs = [(f"tune2-{k}", [*SECOND["star-map"], *v, "--seed", "0",
                                 "--validation-episodes", "100"])
@@ -158,6 +160,8 @@ def _install(out: Path, configs: list[str], algo: str = "ppo") -> None:
             continue
         policy = load_policy(src)
         policy.info["command"] = policy.info.get("command", "").replace(prefix, "results/rl/")
+        if policy.info.get("algorithm") == "sac":  # before its name was kept over the config's
+            policy.info["algorithm"] = "SAC (Stable-Baselines3)"
         save_policy(policy, SHIPPED / f"{algo}-{name}.npz")
         summary = json.loads((out / f"{algo}-{name}-s0.json").read_text())
         summary["command"] = summary.get("command", "").replace(prefix, "results/rl/")

@@ -163,6 +163,8 @@ def test_a_short_training_beats_a_random_policy(tmp_path: Path) -> None:
         (["--frames", "99"], "Invalid value for '--frames'"),
         (["--algo", "dqn"], "algorithm must be one of ppo, sac; got 'dqn'"),
         (["--algo", "sac", "--buffer-size", "0"], "Invalid value for '--buffer-size'"),
+        (["--algo", "sac", "--buffer-size", "4"], "buffer_size must be at least envs (8)"),
+        (["--algo", "sac", "--buffer-size", "9000000"], "buffer_size must be at most 1,713,417 for this"),
     ],
 )
 def test_bad_training_options_are_one_line(args: list[str], message: str, tmp_path: Path,

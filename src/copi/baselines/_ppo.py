@@ -476,9 +476,9 @@ def load_policy(path: str | os.PathLike[str]) -> PolicyWeights:
 
 
 def packaged_policy(name: str) -> Path:
-    """The file of a policy copi ships (``ppo-mix``, ``ppo-star``, ...), or ``name`` itself
-    when it is a path."""
-    if name.endswith(".npz") or os.sep in name:
+    """The file of a policy copi ships (``ppo-mix``, ``ppo-star``, ...; ``seeds/NAME``: a
+    shipped policy of another training seed), or ``name`` itself when it is a path."""
+    if name.endswith(".npz") or (os.sep in name and not name.startswith("seeds/")):
         return Path(name)
     return POLICIES / f"{name}.npz"
 

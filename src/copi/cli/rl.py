@@ -42,7 +42,7 @@ def train_command(
     ent_coef: Annotated[float, typer.Option("--ent", min=0.0, max=1.0,
                                             help="PPO's entropy bonus.")] = 0.005,
     log_std: Annotated[float, typer.Option("--log-std", min=-5.0, max=2.0,
-                                           help="Initial log std of the actions.")] = -0.5,
+                                           help="PPO: initial log std of the actions.")] = -0.5,
     net: Annotated[str, typer.Option("--net", help="Hidden layer widths, e.g. 64,64.")] = "128,128",
     observation: Annotated[
         str, typer.Option("--observation", help="What the policy sees: copi-local-v2 (ranges "

@@ -222,9 +222,10 @@ def _check_meta(ckpt: Path, meta: dict[str, Any], config: TrainConfig) -> None:
     steps = meta.get("steps", _MISSING)
     # PPO trains in whole rollouts: a checkpoint is taken between two
     if not (_is_int(steps, rollout, planned) and steps % rollout == 0):
+        how = f"{config.envs} envs x {config.n_steps}" if config.algorithm == "ppo" \
+            else f"a step of {config.envs} envs"  # fmt: skip
         raise refuse("steps", steps, f"a whole number of rollouts of {rollout:,} steps "
-                     f"({config.envs} envs x {config.n_steps}), at most the run's "
-                     f"{planned:,}")  # fmt: skip
+                     f"({how}), at most the run's {planned:,}")  # fmt: skip
     saved_steps = meta["config"].get("steps", _MISSING)
     if not _is_int(saved_steps, 1, 10**9):
         raise refuse("config.steps", saved_steps, "the steps of a run, 1 .. 1,000,000,000")

@@ -20,6 +20,9 @@ ALGORITHMS = ("ppo", "sac")
 """Stable-Baselines3's PPO (on-policy, a Gaussian policy) and SAC (off-policy, a
 squashed Gaussian, its entropy tuned to a target)."""
 _SAC_ONLY = ("buffer_size", "learning_starts", "gradient_steps", "tau")
+_PPO_ONLY = ("n_steps", "n_epochs", "ent_coef", "log_std")
+_CHECKPOINT_BYTES = 1 << 31
+"""The most a checkpoint's tensors may weigh (its reader's limit)."""
 
 
 @dataclass(frozen=True)
@@ -57,7 +60,8 @@ class TrainConfig:
     ent_coef: float = 0.005
     """PPO's entropy bonus (SAC tunes its own coefficient to a target entropy)."""
     log_std: float = -0.5
-    """The policy's initial log standard deviation of its actions (exploration noise)."""
+    """PPO: the policy's initial log standard deviation of its actions (exploration
+    noise; SAC's actor learns its own from the first step)."""
     buffer_size: int = 100_000
     """SAC: transitions its replay buffer keeps (checkpointed whole)."""
     learning_starts: int = 10_000
@@ -111,6 +115,9 @@ class TrainConfig:
                 f"buffer_size must be at most 10,000,000 (a checkpoint holds the whole "
                 f"buffer); got {self.buffer_size:,}"
             )
+        if self.algorithm == "sac" and self.buffer_size < self.envs:
+            raise InvalidArgumentError(f"buffer_size must be at least envs ({self.envs}): a "
+                                       f"row a step of each; got {self.buffer_size:,}")  # fmt: skip
         for key in ("learning_rate", "gamma", "ent_coef", "tau"):
             v = getattr(self, key)
             if not (isinstance(v, int | float) and math.isfinite(v) and 0 <= v <= 1):
@@ -130,6 +137,19 @@ class TrainConfig:
         # the chauffeur's evader is learnt at map whatever the levels say
         check_layout(self.observation, self.frames,
                      self.levels if self.task == "navigation" else None)  # fmt: skip
+        if self.algorithm == "sac":
+            from copi.baselines import observation_size
+
+            level = "map" if self.task == "chauffeur" else self.levels[0]
+            # the observations twice (this one and the next) in float32, and the rest
+            per = 8 * observation_size(32, self.observation, level, self.frames) + 64
+            if per * self.buffer_size > _CHECKPOINT_BYTES * 0.9:
+                most = int(_CHECKPOINT_BYTES * 0.9 // per)
+                raise InvalidArgumentError(
+                    f"buffer_size must be at most {most:,} for this observation (a "
+                    f"checkpoint holds the whole buffer, {per:,} bytes a transition, and "
+                    f"is at most 2 GiB); got {self.buffer_size:,}"
+                )
         if not self.families or not self.levels:
             raise InvalidArgumentError("families and levels must each name at least one; got "
                                        f"families {self.families!r}, levels {self.levels!r}")
@@ -155,13 +175,13 @@ class TrainConfig:
         return -(-self.steps // self.rollout) * self.rollout
 
     def identity(self) -> dict[str, Any]:
-        """Every field (JSON-able); a PPO run's without SAC's fields, as it was before SAC
-        came (its checkpoints and policies keep their identity)."""
+        """Every field that decides the run (JSON-able): a PPO run's without SAC's fields,
+        as it was before SAC came (its checkpoints and policies keep their identity), a
+        SAC run's without PPO's."""
         d = dataclasses.asdict(self)
         d["net"] = list(self.net)
-        if self.algorithm == "ppo":
-            for key in ("algorithm", *_SAC_ONLY):
-                del d[key]
+        for key in ("algorithm", *_SAC_ONLY) if self.algorithm == "ppo" else _PPO_ONLY:
+            del d[key]
         return d
 
 

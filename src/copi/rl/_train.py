@@ -189,7 +189,7 @@ def train(
             gradient_steps=config.gradient_steps, ent_coef="auto", seed=config.seed,
             device="cpu", verbose=0,
             policy_kwargs={"net_arch": {"pi": list(config.net), "qf": list(config.net)},
-                           "activation_fn": torch.nn.Tanh, "log_std_init": config.log_std},
+                           "activation_fn": torch.nn.Tanh},
         )  # fmt: skip
     else:
         model = PPO(
@@ -223,7 +223,7 @@ def train(
     name = {"ppo": "PPO", "sac": "SAC"}[config.algorithm]
 
     def snapshot() -> PolicyWeights:
-        return export_policy(model, info={"algorithm": name, **config.identity()},
+        return export_policy(model, info={**config.identity(), "algorithm": name},
                              config=config)  # fmt: skip
 
     class Watch(BaseCallback):  # type: ignore[misc]
@@ -286,10 +286,11 @@ def train(
         "config": config.identity(),
         "command": command,
     }
-    policy = export_policy(model, info={"algorithm": f"{name} (Stable-Baselines3)",
+    policy = export_policy(model, info={**config.identity(),
+                                        "algorithm": f"{name} (Stable-Baselines3)",
                                         "steps_per_second": summary["steps_per_second"],
-                                        "seconds": summary["seconds"], "command": command,
-                                        **config.identity()}, config=config)  # fmt: skip
+                                        "seconds": summary["seconds"], "command": command},
+                           config=config)  # fmt: skip
     policy.info.update(validation_success=curve[-1]["success"],
                        kept_steps=int(model.num_timesteps), kept="last")  # fmt: skip
     if keep == "best" and best is not None and \

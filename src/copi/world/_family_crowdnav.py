@@ -23,8 +23,10 @@ decisions).
 
 What differs, said plainly: CrowdNav draws its 500 test episodes from numpy's legacy
 generator seeded 1000 + i; copi draws episode k from ``default_rng([seed, k])`` (the
-same distribution, other draws); humans are navground's ORCA, not Python-RVO2's, and
-copi's world has walls 10 m out (CrowdNav's has none; no human comes near them).
+same distribution, other draws); humans are navground's ORCA, not Python-RVO2's, whose
+speed is capped at that of its preferred velocity (RVO2's at 1 m/s), and navground's
+humans stop at their goals (CrowdNav's keep avoiding the others there); copi's world has
+walls 10 m out (CrowdNav's has none; no human comes near them).
 """
 
 from __future__ import annotations

@@ -106,3 +106,20 @@ def test_runner_store_and_fig5(caps_path: str, tmp_path: Path) -> None:
                                         for ln in provenance)  # fmt: skip
     assert "stationary obstacles, horizon 100, guard 1.2" in provenance[0]
     assert (tmp_path / "rep" / "fig5_pursuit.png").exists()
+
+
+def test_a_policy_registered_without_a_guard_plays_the_game_without_one() -> None:
+    """The game hands its guard to the evaders registered with one (ppo-guard, compass-
+    guard); a PPO policy registered with none (ppo-chauffeur, ppo) plays as trained, not
+    shielded (it once was: its survival was the guard's)."""
+    from copi.experiments.pursuit import _evader_agent
+    from copi.methods import method_spec
+    from copi.world import RangeSensor
+
+    sensor = RangeSensor()
+    for name, guard in (("ppo-chauffeur", 0.0), ("ppo", 0.0), ("ppo-guard", 1.2),
+                        ("compass-guard", 1.2)):  # fmt: skip
+        if not method_spec(name).available():
+            continue
+        agent = _evader_agent(None, PursuitConfig(None, evader=name, guard=1.2), sensor)
+        assert agent.guard == guard, name  # type: ignore[attr-defined]

@@ -268,11 +268,12 @@ def resolve_evader(
 
 def _evader_agent(caps: Any, config: PursuitConfig, sensor: RangeSensor) -> Agent:
     """The evader's method (``learnt``: copi-learnt) with its registered parameters and,
-    where it has a guard, this run's, told a task with no map (it is handed the static
-    reading each step, as the capability evader is)."""
+    where it is registered with a guard, this run's; a method registered with none (a
+    PPO policy played as trained: guard 0) keeps none. Told a task with no map (it is
+    handed the static reading each step, as the capability evader is)."""
     name = "copi-learnt" if config.evader == "learnt" else config.evader
     spec = method_spec(name)
-    extra = {"guard": config.guard} if "guard" in spec.params else {}
+    extra = {"guard": config.guard} if spec.params.get("guard", 0.0) > 0.0 else {}
     agent = make_agent(name, caps if spec.capabilities else None, **extra)
     agent.reset(Task(sensing="map", agent_radius=0.3, goal_tolerance=0.0,
                      n_rays=sensor.n_rays, max_range=sensor.max_range))  # fmt: skip

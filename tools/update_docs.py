@@ -44,10 +44,6 @@ RESULTS: list[tuple[str, str, str, str]] = [
      "hits the static map does not explain, stacked readings), trained in crowds for 2M "
      "steps, beside copi-predictive (learnt, no hand-written guard): in crowds the peer "
      "learnt little and missed its goal (its last column)", "**missed**"),
-    ("rl.md#A new task", "| ppo-chauffeur",
-     "**A new task**, the homicidal chauffeur's evader: copi-learnt's capabilities "
-     "unchanged (its hand-written guard included), against PPO trained for the game with "
-     "the same step budget (a peer that learnt little: see below)", ""),
 ]
 """(source page, the row's first cells, what the line says of it, a phrase the row must
 hold for the line to be true): each headline is the row of a generated table whose first

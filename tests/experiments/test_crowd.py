@@ -81,8 +81,10 @@ def test_a_sweep_is_the_same_inline_on_a_pool_and_on_dask(learnt_caps: Path, tmp
     cfg = _config(learnt_caps)
     run_crowds(cfg, tmp_path / "inline.sqlite", workers=1)
     run_crowds(cfg, tmp_path / "pool.sqlite", workers=2)
+    # a free port for the scheduler's HTTP server (None means 8787, which a test running
+    # beside this one may hold)
     with LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
-                      dashboard_address=None, silence_logs=50) as cluster:  # fmt: skip
+                      dashboard_address=":0", silence_logs=50) as cluster:  # fmt: skip
         run_crowds(cfg, tmp_path / "dask.sqlite", scheduler=cluster.scheduler_address)
     rows = _rows(tmp_path / "inline.sqlite")
     assert len(rows) == 2 * 2 * 2 * 60

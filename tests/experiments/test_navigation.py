@@ -88,7 +88,7 @@ def test_dask_local_cluster_gives_the_same_results(caps_path: str, tmp_path: Pat
     evaluate(cfg, tmp_path / "local.sqlite", workers=1)
     with LocalCluster(
         n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1",
-        dashboard_address=None, silence_logs=50,
+        dashboard_address=":0", silence_logs=50,  # a free port: tests run side by side
     ) as cluster:  # fmt: skip
         evaluate(cfg, tmp_path / "dask.sqlite", scheduler=cluster.scheduler_address)
     assert _rows(tmp_path / "local.sqlite") == _rows(tmp_path / "dask.sqlite")

@@ -202,8 +202,11 @@ def test_every_shipped_policy_loads_and_says_how_it_was_trained() -> None:
     assert len(files) >= 7
     for path in files:
         command = load_policy(path).info.get("command", "")
-        assert command.startswith("copi rl train -o results/rl/ppo-"), (path.name, command)
-        assert " --steps 2000000 " in command and " --seed " in command
+        algo = path.stem.split("-")[0]  # ppo-... or sac-...
+        assert algo in ("ppo", "sac") and command.startswith(
+            f"copi rl train -o results/rl/{algo}-"), (path.name, command)  # fmt: skip
+        assert " --seed " in command and (" --algo sac " in command) == (algo == "sac")
+        assert f" --steps {2000000 if algo == 'ppo' else 1000000} " in command
         if path.parent.name == "seeds":
             seed = path.stem.rsplit("-s", 1)[1]
             assert command.endswith(f"--seed {seed}") and seed != "0"

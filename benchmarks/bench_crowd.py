@@ -37,6 +37,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numba import njit
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
@@ -130,18 +131,17 @@ def env_rate(agents: int, steps: int = 10) -> float:
     return steps / (time.perf_counter() - t0)
 
 
+@njit(cache=False)
+def _work(n: int) -> float:
+    acc = 0.0
+    for k in range(n):
+        acc += math.sin(k * 1e-3)
+    return acc
+
+
 def _spin(n: int) -> float:
     """A second or so of pure arithmetic (numba, no memory traffic)."""
-    from numba import njit
-
-    @njit(cache=False)
-    def work(n: int) -> float:
-        acc = 0.0
-        for k in range(n):
-            acc += math.sin(k * 1e-3)
-        return acc
-
-    return float(work(n))
+    return float(_work(n))
 
 
 def core_scaling(processes: int, n: int = 30_000_000) -> float:
@@ -150,13 +150,12 @@ def core_scaling(processes: int, n: int = 30_000_000) -> float:
     machine is shared): the ceiling of any speed-up copi's processes can give here."""
     import multiprocessing
 
-    _spin(1000)  # compiled in this process, before the fork
+    _spin(1000)  # compiled in this process, before the fork: the workers inherit it
     t0 = time.perf_counter()
     _spin(n)
     one = time.perf_counter() - t0
     ctx = multiprocessing.get_context("fork")
     with ctx.Pool(processes) as pool:
-        pool.map(_spin, [1000] * processes)  # each worker compiles first
         t0 = time.perf_counter()
         pool.map(_spin, [n] * processes)
         many = time.perf_counter() - t0

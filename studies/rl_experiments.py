@@ -47,26 +47,24 @@ from copi.experiments import (  # noqa: E402
     run_benchmark,
 )
 from copi.learning import Capabilities, LearnParams, learn, simulated_steps  # noqa: E402
-from copi.methods import make_agent, method_spec, parse_methods, register_method  # noqa: E402
+from copi.methods import (  # noqa: E402
+    make_agent,
+    method_names,
+    method_spec,
+    parse_methods,
+    register_method,
+)
 from copi.reports import read_benchmark  # noqa: E402
 from copi.results import ResultsStore, paired_difference, summarize_rows  # noqa: E402
 from copi.rl import TrainConfig, validation_success  # noqa: E402
 from studies._common import kept_times  # noqa: E402
 
 FAMILIES = ("star", "polygon", "indoor", "maps", "crowd")
+DOCS = Path(__file__).resolve().parents[1] / "docs"
 
 
-def method_spec_available(name: str) -> bool:
-    """Whether method ``name`` is registered and can run here (its weights shipped)."""
-    from copi.errors import InvalidArgumentError
-
-    try:
-        return method_spec(name).available()
-    except InvalidArgumentError:  # not registered
-        return False
-
-
-SAC_FAMILIES = tuple(f for f in FAMILIES if method_spec_available(f"sac-{f}-map"))
+SAC_FAMILIES = tuple(f for f in FAMILIES if f"sac-{f}-map" in method_names()
+                     and method_spec(f"sac-{f}-map").available())
 """The families SAC was trained on (its policies shipped)."""
 METHODS = ["copi-learnt", "compass-guard", "dwa", "straight", "ppo", "ppo-guard",
            *[f"ppo-{f}" for f in FAMILIES], "copi-predictive@map",
@@ -79,6 +77,14 @@ like it, has or has not a hand-written guard."""
 GOAL_TO_GUARD = {"star": -5, "maps": -5, "polygon": -10, "indoor": -10, "crowd": 0}
 """How far below compass-guard the second peer may stand in each family (points) and
 still count as a peer that learnt (the bar set before it was trained)."""
+
+
+def _learnt(rate: dict, fam: str, peer: str) -> bool:
+    """Whether ``peer`` met the goal of a peer that learnt in family ``fam``: at least 30
+    points above straight, and no further below compass-guard than :data:`GOAL_TO_GUARD`."""
+    at = rate[fam, peer, "map"]
+    return (100 * (at - rate[fam, "straight", "map"]) >= 30
+            and 100 * (at - rate[fam, "compass-guard", "map"]) >= GOAL_TO_GUARD[fam])
 EVADERS = ["learnt", "compass-guard", "ppo", "ppo-guard", "ppo-chauffeur", "game"]
 
 
@@ -147,9 +153,7 @@ def second_peer_lines(succ: dict, rate: dict) -> list[str]:
         d, better, _ = _compare(c, p, "copi-predictive", peer)
         d_st = _compare(p, st, "", "")[0]
         d_cg = _compare(p, cg, "", "")[0]
-        gap_st = 100 * (rate[fam, peer, "map"] - rate[fam, "straight", "map"])
-        gap_cg = 100 * (rate[fam, peer, "map"] - rate[fam, "compass-guard", "map"])
-        ok = gap_st >= 30 and gap_cg >= GOAL_TO_GUARD[fam]
+        ok = _learnt(rate, fam, peer)
         met += ok
         bar = f"straight + 30, compass-guard {GOAL_TO_GUARD[fam]:+d}"
         lines.append(
@@ -209,9 +213,7 @@ def sac_lines(succ: dict, rate: dict) -> list[str]:
             continue
         shipped = SEEDS.parent / f"sac-{fam}-map.json"  # what trained the shipped policy
         info = json.loads(shipped.read_text()) if shipped.is_file() else {}
-        gap_st = 100 * (rate[fam, sac, "map"] - rate[fam, "straight", "map"])
-        gap_cg = 100 * (rate[fam, sac, "map"] - rate[fam, "compass-guard", "map"])
-        ok = gap_st >= 30 and gap_cg >= GOAL_TO_GUARD[fam]
+        ok = _learnt(rate, fam, sac)
         took = f"{info['steps']:,} in {info['seconds'] / 60:.0f} min" if info else "—"
         rows.append(
             f"| {fam} | {_pct(rate[fam, 'straight', 'map'])} | "
@@ -247,9 +249,6 @@ def sac_lines(succ: dict, rate: dict) -> list[str]:
           if (DOCS / f"rl-curve-sac-{f}-map.png").is_file()],
         "",
     ]
-
-
-DOCS = Path(__file__).resolve().parents[1] / "docs"
 
 
 def tuning_lines(out: Path) -> list[str]:

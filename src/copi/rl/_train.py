@@ -8,6 +8,7 @@ else of copi imports this module's dependencies.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import os
@@ -295,12 +296,9 @@ def train(
                        kept_steps=int(model.num_timesteps), kept="last")  # fmt: skip
     if keep == "best" and best is not None and \
             best.info["validation_success"] > curve[-1]["success"]:  # fmt: skip
-        policy = PolicyWeights(best.layers, policy.n_rays, policy.max_range,
-                               {**policy.info, "validation_success":
-                                best.info["validation_success"],
-                                "kept_steps": best.info["kept_steps"]},
-                               policy.observation, policy.level, policy.frames,
-                               policy.output)  # fmt: skip
+        policy = dataclasses.replace(policy, layers=best.layers, info={
+            **policy.info, "validation_success": best.info["validation_success"],
+            "kept_steps": best.info["kept_steps"]})  # fmt: skip
     policy.info["kept"] = keep
     summary["kept_steps"] = policy.info["kept_steps"]
     summary["kept_success"] = policy.info["validation_success"]

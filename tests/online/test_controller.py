@@ -235,7 +235,7 @@ def test_room_distances_match_a_plain_rendition(seed, angle, step, walls) -> Non
     hits = np.empty((2, n))
     km, k0 = kernels._hits(s, static, cos, sin, 10.0, hits)
     ax, ay = math.cos(angle), math.sin(angle)
-    end, sweep, sweep_all = kernels._room(hits, km, k0, ax, ay, step)
+    end, sweep, sweep_all = kernels._room(hits, km, k0, ax, ay, step, 0.0)
     seen = s < 10.0
     moving = seen & (s < static - 0.05)
     pts = np.column_stack([s * cos, s * sin])
@@ -246,6 +246,13 @@ def test_room_distances_match_a_plain_rendition(seed, angle, step, walls) -> Non
             path[seen].min(initial=np.inf)]  # fmt: skip
     np.testing.assert_allclose([end, sweep, sweep_all], want, rtol=1e-12, atol=1e-12)
     assert km == moving.sum() and n - k0 == (seen & ~moving).sum()
+    # told to stop below a distance, it stops at a path distance below it, else measures all
+    for stop in (0.31, 1.0, 3.0):
+        got = kernels._room(hits, km, k0, ax, ay, step, stop)
+        if want[2] < stop:
+            assert got[0] == got[1] == got[2] < stop and np.isclose(path, got[2]).any()
+        else:
+            np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12)
 
 
 @settings(max_examples=30, deadline=None)

@@ -199,7 +199,7 @@ def _learnt_choose(  # type: ignore[no-untyped-def]
             # when nothing is admitted), so they are not measured
             end = sweep = sweep_all = np.inf
         else:
-            end, sweep, sweep_all = _room(hits, km, k0, ax, ay, step)
+            end, sweep, sweep_all = _room(hits, km, k0, ax, ay, step, wall)
         if guard <= 0.0:
             end = np.inf
             sweep = np.inf

@@ -146,7 +146,7 @@ def _path_d2(px, py, ax, ay, step):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True, inline="always")
-def _room(hits, km, k0, ax, ay, step):  # type: ignore[no-untyped-def]
+def _room(hits, km, k0, ax, ay, step, stop):  # type: ignore[no-untyped-def]
     """For a step of length ``step`` along (ax, ay): the least distance from the moved
     agent to a hit the static map does not explain (a moving obstacle), the least
     distance from its path to such a hit, and from its path to any hit (``hits``,
@@ -154,15 +154,22 @@ def _room(hits, km, k0, ax, ay, step):  # type: ignore[no-untyped-def]
 
     The minima are taken over squared distances and rooted once: the square root is
     correctly rounded and monotone, so this is exactly the least of the rooted distances
-    (two square roots a hit and candidate fewer)."""
+    (two square roots a hit and candidate fewer). Once the path comes nearer than
+    ``stop`` to a hit, every caller refuses the step whatever the other distances are:
+    the measuring stops there, and the three distances returned are that path distance
+    (below ``stop``, not necessarily the least)."""
     end = np.inf
     sweep = np.inf
+    stop2 = stop * stop
     ex = step * ax
     ey = step * ay
     for i in range(km):
         px = hits[0, i]
         py = hits[1, i]
         dd = _path_d2(px, py, ax, ay, step)
+        if dd < stop2:
+            r = math.sqrt(dd)
+            return r, r, r
         if dd < sweep:
             sweep = dd
         de = (px - ex) ** 2 + (py - ey) ** 2
@@ -173,6 +180,9 @@ def _room(hits, km, k0, ax, ay, step):  # type: ignore[no-untyped-def]
         px = hits[0, i]
         py = hits[1, i]
         dd = _path_d2(px, py, ax, ay, step)
+        if dd < stop2:
+            r = math.sqrt(dd)
+            return r, r, r
         if dd < sweep_all:
             sweep_all = dd
     return math.sqrt(end), math.sqrt(sweep), math.sqrt(sweep_all)
@@ -206,7 +216,7 @@ def _escape(hits, km, k0, n, clear, roomy, out):  # type: ignore[no-untyped-def]
     esc = -1
     for d in range(n):
         a0 = 2.0 * math.pi * d / n
-        end, _, sweep_all = _room(hits, km, k0, math.cos(a0), math.sin(a0), 1.0)
+        end, _, sweep_all = _room(hits, km, k0, math.cos(a0), math.sin(a0), 1.0, roomy)
         if sweep_all >= roomy and end > clear:
             clear = end
             esc = d
@@ -228,7 +238,7 @@ def _refused(hits, km, k0, ax, ay, score, reach, guard, wall):  # type: ignore[n
     be stopped there: without this, a quantised direction pressed into a wall corner for
     good where the route hugs it. Returns (refused, end, sweep_all)."""
     step = _step_length(score * reach, reach)
-    end, sweep, sweep_all = _room(hits, km, k0, ax, ay, step)
+    end, sweep, sweep_all = _room(hits, km, k0, ax, ay, step, wall)
     if guard <= 0.0:
         end = np.inf
         sweep = np.inf

@@ -5,7 +5,8 @@ through the grid, the moves, the contacts, and the placement without overlap.
 Why by hand: each step every one of N agents casts 32 rays against the walls and the
 other agents' discs. Brute force is N discs per scan (10,000 agents: 3 billion ray tests
 a step); the grid hands a scan only the discs near it, ring of cells by ring of cells
-outward, and stops as soon as no disc farther out can shorten any ray. A disc is tested
+outward, and stops as soon as no disc farther out can shorten any ray; each disc is
+tested on the one or two rays of its angular window only. A disc is tested
 with the same formula as :func:`copi.geometry.kernels._scan_into`, whose wall loop each
 scan reuses, so a crowd's reading is bitwise the one :class:`copi.world.RangeSensor`
 gives with every other agent as a disc (tested).
@@ -35,11 +36,13 @@ def _cell(v, v0, h, n):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
-def build_grid(positions, active, x0, y0, h, nx, ny, cell_of, start, items, fill):  # type: ignore[no-untyped-def]
+def build_grid(positions, active, x0, y0, h, nx, ny, cell_of, start, items, fill, ordered):  # type: ignore[no-untyped-def]
     """Sort the active agents into the grid (a counting sort: two passes over the agents).
 
     ``cell_of`` (N,) receives each agent's cell (-1 when inactive); ``start`` (nx ny + 1,)
-    and ``items`` (N,) the cells' contents; ``fill`` (nx ny,) is scratch."""
+    and ``items`` (N,) the cells' contents, ``ordered`` (N, 2) their positions in that
+    order (so that a scan reads the discs of a cell from consecutive memory); ``fill``
+    (nx ny,) is scratch."""
     n_cells = nx * ny
     for c in range(n_cells + 1):
         start[c] = 0
@@ -57,6 +60,8 @@ def build_grid(positions, active, x0, y0, h, nx, ny, cell_of, start, items, fill
         c = cell_of[i]
         if c >= 0:
             items[fill[c]] = i
+            ordered[fill[c], 0] = positions[i, 0]
+            ordered[fill[c], 1] = positions[i, 1]
             fill[c] += 1
 
 
@@ -71,8 +76,8 @@ def _farthest(row):  # type: ignore[no-untyped-def]
 
 @njit(cache=True, inline="always")
 def _bearing(x, y):  # type: ignore[no-untyped-def]
-    """atan2(y, x) within 0.004 rad, without a library call (the window it places has a
-    ray to spare each side, 0.2 rad for 32 rays)."""
+    """atan2(y, x) within 0.004 rad, without a library call (the window it places is
+    widened by :data:`_SPARE` of a ray each side, 0.02 rad for 32 rays)."""
     ax = abs(x)
     ay = abs(y)
     a = min(ax, ay) / max(ax, ay)
@@ -84,36 +89,35 @@ def _bearing(x, y):  # type: ignore[no-untyped-def]
     return -t if y < 0.0 else t
 
 
+_SPARE = 0.1
+"""How much of a ray's spacing a disc's angular window is widened each side: five times
+:func:`_bearing`'s error for 32 rays (0.004 rad is 0.02 of their spacing)."""
+
+
 @njit(cache=True, inline="always")
-def _discs_of_cell(b, ox, oy, c, positions, radius, cos, sin, start, items, row, far):  # type: ignore[no-untyped-def]
-    """Lower ``row`` by the discs of cell c (agent b's own aside), as ``_scan_into``
-    does, each on the rays of its angular window only (one to spare each side); returns
-    -1 when b's centre is inside one (then ``row`` is all 0), else 1 if a reading was
-    lowered, 0 if none."""
-    lowered = 0
+def _discs_of_cell(b, ox, oy, c, ordered, items, start, radius, cos, sin, per, reach2, row):  # type: ignore[no-untyped-def]
+    """Lower ``row`` by the discs of cell c (agent b's own aside) whose centres lie
+    nearer than sqrt(``reach2``), as ``_scan_into`` does, each on the rays of its angular
+    window only; returns True when b's centre is inside one (then ``row`` is all 0)."""
     n = cos.shape[0]
-    per = n / (2.0 * math.pi)
     r = radius
     for p in range(start[c], start[c + 1]):
-        k = items[p]
-        if k == b:
+        vx = ox - ordered[p, 0]
+        vy = oy - ordered[p, 1]
+        d2 = vx * vx + vy * vy
+        if d2 >= reach2 or items[p] == b:
             continue
-        vx = ox - positions[k, 0]
-        vy = oy - positions[k, 1]
-        cc = vx * vx + vy * vy - r * r
+        cc = d2 - r * r
         if cc <= 0.0:
             for i in range(n):
                 row[i] = 0.0
-            return -1
-        # a disc whose nearest point is beyond every reading it could shorten: none
-        reach = far + r
-        if vx * vx + vy * vy >= reach * reach:
-            continue
-        # the bearing of the centre, and r / sqrt(cc) >= asin(r / d), the half-width
+            return True
+        # a ray meets the disc only within asin(r / d) <= r / sqrt(cc) of its centre's
+        # bearing: the rays of that window (in ray spacings), widened by _SPARE
         mid = _bearing(-vx, -vy) * per
-        half = r / math.sqrt(cc) * per
-        first = int(math.floor(mid - half)) - 1
-        last = int(math.ceil(mid + half)) + 2
+        half = r / math.sqrt(cc) * per + _SPARE
+        first = int(math.ceil(mid - half))
+        last = int(math.floor(mid + half)) + 1
         if last - first >= n:
             first = 0
             last = n
@@ -125,63 +129,59 @@ def _discs_of_cell(b, ox, oy, c, positions, radius, cos, sin, start, items, row,
             t = ray_disc(cos[i], sin[i], vx, vy, cc)
             if t < row[i]:
                 row[i] = t
-                lowered = 1
-    return lowered
+    return False
 
 
 @njit(cache=True, inline="always")
-def _scan_one(b, positions, cos, sin, segs, radius, max_range, x0, y0, h, nx, ny, start,  # type: ignore[no-untyped-def]
-              items, sectors, row, no_centers, no_radii):  # fmt: skip
-    ox = positions[b, 0]
-    oy = positions[b, 1]
+def _cell_distance2(ox, oy, x0, y0, h, i, j):  # type: ignore[no-untyped-def]
+    """The squared distance from (ox, oy) to cell (i, j)'s square (0 inside)."""
+    xl = x0 + i * h
+    yl = y0 + j * h
+    dx = max(xl - ox, ox - (xl + h), 0.0)
+    dy = max(yl - oy, oy - (yl + h), 0.0)
+    return dx * dx + dy * dy
+
+
+@njit(cache=True, inline="always")
+def _scan_one(b, ox, oy, cos, sin, segs, radius, max_range, x0, y0, h, nx, ny, start,  # type: ignore[no-untyped-def]
+              items, ordered, row, no_centers, no_radii):  # fmt: skip
     _scan_into(ox, oy, cos, sin, segs, no_centers, no_radii, max_range, row)
-    n = cos.shape[0]
+    per = cos.shape[0] / (2.0 * math.pi)
     ci = _cell(ox, x0, h, nx)
     cj = _cell(oy, y0, h, ny)
-    far = _farthest(row)
-    # cells nearest first: once a cell's discs are all beyond every reading, so are the
-    # rest's
-    for e in range(sectors.shape[0]):
-        if sectors[e, 4] >= far:
-            break
-        i = ci + int(sectors[e, 0])
-        j = cj + int(sectors[e, 1])
-        if i < 0 or i >= nx or j < 0 or j >= ny:
-            continue
-        c = j * nx + i
-        if start[c] == start[c + 1]:
-            continue
-        lo = int(sectors[e, 2])
-        m = int(sectors[e, 3])
-        fc = 0.0  # the farthest reading among the rays that can meet the cell's discs
-        for q in range(lo, lo + m):
-            v = row[q - n if q >= n else q]
-            if v > fc:
-                fc = v
-        if sectors[e, 4] >= fc:
-            continue
-        done = _discs_of_cell(b, ox, oy, c, positions, radius, cos, sin, start, items, row, fc)
-        if done < 0:
+    # rings of cells outward (ring k: the cells k away along x or y); once a ring's
+    # nearest possible disc, farther than (k - 1) h, is beyond every reading, so are
+    # the rest's
+    for k in range(max(ci, nx - 1 - ci, cj, ny - 1 - cj) + 1):
+        reach = _farthest(row) + radius
+        if (k - 1) * h >= reach:
             return
-        if done > 0 and fc == far:  # the farthest reading may have been lowered
-            far = _farthest(row)
+        reach2 = reach * reach
+        for j in range(max(cj - k, 0), min(cj + k, ny - 1) + 1):
+            # the ring's top and bottom rows whole, its other rows at both ends
+            jump = 1 if (j == cj - k or j == cj + k) else max(2 * k, 1)
+            for i in range(ci - k, ci + k + 1, jump):
+                if i < 0 or i >= nx or _cell_distance2(ox, oy, x0, y0, h, i, j) >= reach2:
+                    continue
+                if _discs_of_cell(b, ox, oy, j * nx + i, ordered, items, start, radius, cos,
+                                  sin, per, reach2, row):  # fmt: skip
+                    return
 
 
 @njit(cache=True)
 def scan_agents(positions, active, lo, hi, cos, sin, segs, radius, max_range, x0, y0, h, nx,  # type: ignore[no-untyped-def]
-                ny, start, items, sectors, out):  # fmt: skip
+                ny, start, items, ordered, out):  # fmt: skip
     """``out[b]``: the ring reading of each active agent b in ``lo .. hi - 1`` against
     the walls ``segs`` and every other active agent's disc (radius ``radius``) in the
-    grid; rows of inactive agents are left as they are. ``sectors`` (M, 5) lists the
-    cells around an agent's, nearest first, as rows (di, dj, first ray, rays, least
-    distance): the rays that can meet a disc centred there and that disc's least
-    distance (:func:`copi.world.crowd.cell_sectors`)."""
+    grid; rows of inactive agents are left as they are. ``ordered`` holds the grid's
+    agents' positions in the grid's order (:func:`build_grid`)."""
     no_centers = np.empty((0, 2))
     no_radii = np.empty(0)
     for b in range(lo, hi):
         if active[b]:
-            _scan_one(b, positions, cos, sin, segs, radius, max_range, x0, y0, h, nx, ny,
-                      start, items, sectors, out[b], no_centers, no_radii)  # fmt: skip
+            _scan_one(b, positions[b, 0], positions[b, 1], cos, sin, segs, radius,
+                      max_range, x0, y0, h, nx, ny, start, items, ordered, out[b],
+                      no_centers, no_radii)  # fmt: skip
 
 
 @njit(cache=True)
@@ -202,15 +202,25 @@ def move_agents(positions, actions, active, segs, radius, old, blocked):  # type
 
 
 @njit(cache=True)
-def agent_gaps(old, positions, active, radius, reach, x0, y0, h, nx, ny, start, items, gap):  # type: ignore[no-untyped-def]
-    """``gap[b]``: the least surface distance between active agent b and any other over
-    the step (both moving linearly from ``old`` to ``positions``; negative: a contact),
-    inf when none is within ``reach`` (two radii plus two steps: none nearer can be met).
-    The grid is the one of ``old``."""
+def agent_gaps(old, positions, active, radius, exact, x0, y0, h, nx, ny, start, items, ordered,  # type: ignore[no-untyped-def]
+               gap):  # fmt: skip
+    """``gap[b]`` for each agent b: the least surface distance between active agent b
+    and any other over the step (both moving linearly from ``old`` to ``positions``,
+    each by at most one agent step; negative: a contact), exact whenever it is below
+    ``exact``, else at least ``exact``; inf when no agent started within ``exact`` + 2
+    radii + 2 of b (none of those can come within ``exact``). The grid is the one of
+    ``old`` (``ordered``: their positions in its order, :func:`build_grid`).
+
+    Only the pairs that started that near are measured (a squared distance first: most
+    agents of the cells around are farther), each pair once: the closest approach of b
+    to k is the one of k to b, bit for bit (the differences only change sign)."""
     two_r = 2.0 * radius
-    w = int(math.ceil(reach / h))
+    near = exact + two_r + 2.0
+    near2 = near * near
+    w = int(math.ceil(near / h))
     for b in range(old.shape[0]):
         gap[b] = np.inf
+    for b in range(old.shape[0]):
         if not active[b]:
             continue
         ax = old[b, 0]
@@ -219,20 +229,59 @@ def agent_gaps(old, positions, active, radius, reach, x0, y0, h, nx, ny, start, 
         ady = positions[b, 1] - ay
         ci = _cell(ax, x0, h, nx)
         cj = _cell(ay, y0, h, ny)
-        best = np.inf
         for j in range(max(cj - w, 0), min(cj + w + 1, ny)):
             for i in range(max(ci - w, 0), min(ci + w + 1, nx)):
                 c = j * nx + i
                 for p in range(start[c], start[c + 1]):
+                    ox = ordered[p, 0] - ax
+                    oy = ordered[p, 1] - ay
+                    if ox * ox + oy * oy > near2:
+                        continue
                     k = items[p]
-                    if k == b:
+                    if k <= b:  # b itself, or a pair measured from k
                         continue
                     d = closest_approach(ax, ay, adx, ady, old[k, 0], old[k, 1],
                                          positions[k, 0] - old[k, 0],
-                                         positions[k, 1] - old[k, 1])  # fmt: skip
-                    if d - two_r < best:
-                        best = d - two_r
-        gap[b] = best
+                                         positions[k, 1] - old[k, 1]) - two_r  # fmt: skip
+                    if d < gap[b]:
+                        gap[b] = d
+                    if d < gap[k]:
+                        gap[k] = d
+
+
+@njit(cache=True)
+def account(positions, old, goals, was, gap, tolerance, t, leave, velocities, path_length,  # type: ignore[no-untyped-def]
+            contacts, min_gap, arrivals, outcome, ended, trip_length, active, contact,
+            reached, left):  # fmt: skip
+    """The books of step ``t`` (the step just taken, from ``old`` to ``positions``, by
+    the agents ``was`` in the world) in one pass: each agent's velocity, path length,
+    contacts (``gap`` below 0), least gap, arrivals (within ``tolerance`` of its goal),
+    its first trip's outcome (1 success, 2 collision), end and length; with ``leave``,
+    an agent whose trip ended leaves (``active``). ``contact``, ``reached`` and ``left``
+    receive the step's flags. The same sums, in the same order, as the arrays'."""
+    for i in range(positions.shape[0]):
+        vx = positions[i, 0] - old[i, 0]
+        vy = positions[i, 1] - old[i, 1]
+        velocities[i, 0] = vx
+        velocities[i, 1] = vy
+        path_length[i] += np.hypot(vx, vy)
+        c = gap[i] < 0.0
+        dx = positions[i, 0] - goals[i, 0]
+        dy = positions[i, 1] - goals[i, 1]
+        r = was[i] and np.hypot(dx, dy) <= tolerance
+        contact[i] = c
+        reached[i] = r
+        contacts[i] += c
+        if gap[i] < min_gap[i]:
+            min_gap[i] = gap[i]
+        arrivals[i] += r
+        if was[i] and outcome[i] == 0 and (c or r):
+            outcome[i] = 2 if c else 1
+            ended[i] = t
+            trip_length[i] = path_length[i]
+        left[i] = leave and was[i] and (c or r)
+        if left[i]:
+            active[i] = False
 
 
 @njit(cache=True)

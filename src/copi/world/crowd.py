@@ -46,10 +46,10 @@ __all__ = [
     "Crowd",
     "CrowdStep",
     "MAX_AGENTS",
+    "GAP_EXACT",
     "MAX_DENSITY",
     "RUNNING",
     "SUCCESS",
-    "cell_sectors",
     "check_density",
     "crowd_room",
     "place_agents",
@@ -64,6 +64,9 @@ apart fit no tighter even packed hexagonally (2.73); random placement gives up w
 before (near 1.5, saying how many fitted)."""
 PLACEMENT_GAP = 0.05
 """Least gap between two agents' discs, and between a disc and a wall, at the start."""
+GAP_EXACT = 1.0
+"""A step's gap (:attr:`CrowdStep.gap`) is exact below this (agent steps): a contact is
+a gap below 0; a larger gap only says that no agent came nearer."""
 _CELL_SPACINGS = 2.0
 """A grid cell's side, in mean distances between agents (sqrt(area / N)): about four
 agents a cell (measured: from one to three spacings the scan's cost changes little;
@@ -103,42 +106,6 @@ def check_density(density: Any) -> float:
             f"discs of radius 0.3 fit, even packed as tightly as they go); got {d:g}"
         )
     return d
-
-
-def cell_sectors(h: float, radius: float, n_rays: int, max_range: float) -> FloatArray:
-    """The grid cells around an agent's that a scan may visit, nearest first: rows (di,
-    dj, first ray, rays, least distance) for the cell di, dj cells away (up to
-    ceil((max_range + radius) / h) + 1 either way): the rays (from the first, mod
-    ``n_rays``, one to spare each side) that can meet a disc of ``radius`` centred in
-    that cell, and the least distance from the agent to such a disc, wherever the two
-    are within their cells. The cells next to the agent's take every ray and distance
-    -inf. Shape (M, 5).
-
-    Every ray towards a point of the disc points into the square of the centres the disc
-    may have, widened by the radius; that square keeps off the agent's cell, so its
-    corners bound the angles (less than half a turn apart).
-    """
-    k = math.ceil((max_range + radius) / h) + 1
-    step = 2 * math.pi / n_rays
-    rows = []
-    for di in range(-k, k + 1):
-        for dj in range(-k, k + 1):
-            if abs(di) <= 1 and abs(dj) <= 1:
-                rows.append((di, dj, 0, n_rays, -np.inf))
-                continue
-            xl, xh, yl, yh = (di - 1) * h, (di + 1) * h, (dj - 1) * h, (dj + 1) * h
-            near = math.hypot(max(xl, 0.0, -xh), max(yl, 0.0, -yh)) - radius
-            if near >= max_range:
-                continue
-            mid = math.atan2(yl + yh, xl + xh)
-            rel = [(math.atan2(y, x) - mid + math.pi) % (2 * math.pi) - math.pi
-                   for x in (xl - radius, xh + radius) for y in (yl - radius, yh + radius)]
-            first = math.floor((mid + min(rel)) / step) - 1
-            last = math.ceil((mid + max(rel)) / step) + 1
-            m = min(last - first + 1, n_rays)
-            rows.append((di, dj, first % n_rays if m < n_rays else 0, m, near))
-    out = np.array(rows, dtype=np.float64)
-    return np.ascontiguousarray(out[np.lexsort((out[:, 1], out[:, 0], out[:, 4]))])
 
 
 def _free_points(world: World, rng: np.random.Generator, n: int, clear: float) -> FloatArray:
@@ -236,7 +203,8 @@ class CrowdStep:
     reached: NDArray[np.bool_]
     """Its centre ended within the goal tolerance of its goal."""
     gap: NDArray[np.float64]
-    """Least surface distance to another agent over the step (inf: none near)."""
+    """Least surface distance to another agent over the step, exact below
+    :data:`GAP_EXACT`; above, at least that (inf: none near)."""
     blocked: NDArray[np.bool_]
     """A wall stopped it short of its move."""
     left: NDArray[np.bool_]
@@ -326,11 +294,11 @@ class Crowd:
         self._start = np.empty(cells + 1, dtype=np.int64)
         self._items = np.empty(n, dtype=np.int64)
         self._fill = np.empty(cells, dtype=np.int64)
+        self._ordered = np.empty((n, 2))
         self._old = np.empty_like(self.positions)
         self._blocked = np.empty(n, dtype=np.bool_)
         self._gap = np.empty(n)
         self._near = np.empty(n, dtype=np.int64)
-        self._sectors = cell_sectors(h, self.radius, self.sensor.n_rays, self.sensor.max_range)
         self.record_every = int(record_every)
         self.frames: list[tuple[int, NDArray[np.float32], NDArray[np.bool_]]] = []
         """(t, positions as float32, active) every ``record_every`` steps."""
@@ -371,7 +339,7 @@ class Crowd:
         """Sort the agents still in the world into the grid (after they moved)."""
         x0, y0, h, nx, ny = self._grid
         kernels.build_grid(self.positions, self.active, x0, y0, h, nx, ny, self._cell_of,
-                           self._start, self._items, self._fill)  # fmt: skip
+                           self._start, self._items, self._fill, self._ordered)  # fmt: skip
 
     def scan(self, lo: int = 0, hi: int | None = None) -> None:
         """Readings of the agents ``lo .. hi - 1`` still in the world into :attr:`ranges`
@@ -381,7 +349,7 @@ class Crowd:
         kernels.scan_agents(self.positions, self.active, int(lo),
                             self.n_agents if hi is None else int(hi), s.cos, s.sin,
                             self.world.segments, self.radius, s.max_range, x0, y0, h, nx, ny,
-                            self._start, self._items, self._sectors, self.ranges)  # fmt: skip
+                            self._start, self._items, self._ordered, self.ranges)  # fmt: skip
 
     def sense(self) -> None:
         """:meth:`index`, then every agent's reading."""
@@ -431,27 +399,19 @@ class Crowd:
         kernels.move_agents(self.positions, np.ascontiguousarray(a), was, self.world.segments,
                             self.radius, self._old, self._blocked)  # fmt: skip
         # the grid still holds the positions before the move, as agent_gaps needs
-        kernels.agent_gaps(self._old, self.positions, was, self.radius, 2 * self.radius + 2.0,
-                           x0, y0, h, nx, ny, self._start, self._items, self._gap)  # fmt: skip
+        kernels.agent_gaps(self._old, self.positions, was, self.radius, GAP_EXACT,
+                           x0, y0, h, nx, ny, self._start, self._items, self._ordered,
+                           self._gap)  # fmt: skip
         gap = self._gap.copy()
-        contact = gap < 0.0
-        d = self.positions - self.goals
-        reached = was & (np.hypot(d[:, 0], d[:, 1]) <= self.goal_tolerance)
         self.t += 1
-        np.subtract(self.positions, self._old, out=self.velocities)
-        self.path_length += np.hypot(self.velocities[:, 0], self.velocities[:, 1])
-        self.contacts += contact
-        np.minimum(self.min_gap, gap, out=self.min_gap)
-        self.arrivals += reached
-        first = was & (self.outcome == RUNNING) & (contact | reached)
-        self.outcome[first] = np.where(contact[first], COLLISION, SUCCESS)
-        self.ended[first] = self.t
-        self.trip_length[first] = self.path_length[first]
-        if leave:
-            left = was & (contact | reached)
-            self.active &= ~left
-        else:
-            left = np.zeros(n, dtype=np.bool_)
+        contact = np.empty(n, dtype=np.bool_)
+        reached = np.empty(n, dtype=np.bool_)
+        left = np.empty(n, dtype=np.bool_)
+        kernels.account(self.positions, self._old, self.goals, was, gap, self.goal_tolerance,
+                        self.t, leave, self.velocities, self.path_length, self.contacts,
+                        self.min_gap, self.arrivals, self.outcome, self.ended,
+                        self.trip_length, self.active, contact, reached, left)  # fmt: skip
+        if not leave:
             rows = np.flatnonzero(reached)
             if len(rows):
                 self.goals[rows] = _draw_goals(self.world, self.rng, self.positions[rows],

@@ -114,15 +114,22 @@ class BatchDriver(Driver):
         self.goal = _shared(self.goal, keep)
 
     def _decide(self, crowd: Crowd, rows: NDArray[np.intp]) -> NDArray[np.float64]:
-        k = rows - self.lo
-        s = crowd.ranges[rows]
-        fresh = (self.goal[k] != crowd.goals[rows]).any(axis=1)
-        self.prev[k[fresh]] = s[fresh]
-        want, reach = _aim(crowd, rows)
+        r: Any = rows
+        k: Any = rows - self.lo
+        if rows[-1] - rows[0] + 1 == len(rows):  # consecutive (a steady crowd): views
+            r = slice(int(rows[0]), int(rows[-1]) + 1)
+            k = slice(r.start - self.lo, r.stop - self.lo)
+        s = crowd.ranges[r]
+        goals = crowd.goals[r]
+        fresh = np.flatnonzero((self.goal[k] != goals).any(axis=1))
+        if len(fresh):
+            self.prev[k.start + fresh if isinstance(k, slice) else k[fresh]] = s[fresh]
+        want = goals - crowd.positions[r]
+        reach = np.hypot(want[:, 0], want[:, 1])
         acts, _ = self.agent.decide_batch(s, self.prev[k], want, reach,
                                           recognise=self.agent.beta > 0.0)  # fmt: skip
         self.prev[k] = s
-        self.goal[k] = crowd.goals[rows]
+        self.goal[k] = goals
         return acts
 
 
@@ -323,10 +330,11 @@ class Team:
             _raise_reported(answer)
         return self.actions
 
-    def take_chunks(self, t: int, *, index: bool = False) -> None:
+    def take_chunks(self, t: int, *, index: bool = False, notify: Any = None) -> None:
         """Take the chunks of step t still free, one at a time, and scan and decide for
         them (first indexing the crowd, with ``index``: the positions cannot move while a
-        chunk of the step is out)."""
+        chunk of the step is out); a worker finishing the step's last chunk says so on
+        its pipe ``notify``, which wakes this process at once."""
         crowd = self.crowd
         n = len(self.chunks)
         while True:
@@ -344,15 +352,18 @@ class Team:
             self.driver.decide(crowd, self.actions, lo, hi)
             with self.lock:
                 self.ctl[2] += 1
+                last = self.ctl[2] == n
+            if last and notify is not None:
+                notify.send(("done", t))
 
     def _wait_chunks(self) -> None:
         """Until every chunk of the step is done (a worker's error or death is raised)."""
         from multiprocessing.connection import wait
 
         while self.ctl[2] < len(self.chunks):
-            ready = wait([conn for _, conn in self.workers], timeout=0.0005)
+            ready = wait([conn for _, conn in self.workers], timeout=0.01)
             for proc, conn in self.workers:
-                if conn in ready:  # only ever an error, or the pipe of one that died
+                if conn in ready:  # the last chunk done, an error, or the pipe of one that died
                     try:
                         answer = conn.recv()
                     except (EOFError, OSError):
@@ -438,7 +449,8 @@ def _work_loop(conn: Any, step: Callable[[int], None], driver: Callable[[], Driv
 def _serve_chunks(conn: Any, team: Team) -> None:
     """A worker of a shared driver: each step, chunks until none is left (a step already
     over has none)."""
-    _work_loop(conn, lambda t: team.take_chunks(t, index=True), lambda: team.driver)
+    _work_loop(conn, lambda t: team.take_chunks(t, index=True, notify=conn),
+               lambda: team.driver)  # fmt: skip
 
 
 def _serve(conn: Any, crowd: Crowd, make: Callable[[int, int], Driver], lo: int, hi: int,

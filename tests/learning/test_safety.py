@@ -301,6 +301,53 @@ def test_a_batch_decides_as_one_agent_at_a_time(learnt) -> None:
         agent.decide_batch(bad, prev, want)
 
 
+def test_rows_of_shared_arrays_are_decided_as_a_batch(learnt) -> None:
+    """decide_rows (a crowd's agents, in place) makes decide_batch's decisions, treats a
+    changed goal as a new task (no previous reading) and skips agents out of the world."""
+    agent = LearntAgent(learnt, alpha=2.0, wait=False, guard=1.05, beta=0.0)
+    rng = np.random.default_rng(3)
+    n = 60
+    s = rng.uniform(0.3, 10.0, (n, 32))
+    s[rng.random((n, 32)) < 0.3] = 10.0
+    prev = np.clip(s + rng.normal(0, 0.3, s.shape), 0.0, 10.0)
+    pos = rng.uniform(0, 50, (n, 2))
+    goals = pos + rng.normal(0, 5, (n, 2))
+    goals[5] = pos[5]  # at its goal: no move
+    active = rng.random(n) < 0.8
+    first = 10  # the rows' state starts at agent 10
+    kept_prev = np.full((n, 32), -1.0)
+    kept_prev[first:] = prev[first:]
+    kept_goal = np.full((n, 2), np.nan)
+    kept_goal[first:] = goals[first:]
+    new = np.arange(first, n, 2)
+    kept_goal[new] += 1.0  # these agents' goals changed: their previous readings are void
+    kept_prev[new] = np.clip(s[new] + 3.0, 0.0, 10.0)  # (stale readings, far from these)
+    state_p, state_g = kept_prev[first:].copy(), kept_goal[first:].copy()
+    actions = np.full((n, 2), 7.0)
+    agent.decide_rows(s, pos, goals, active, first, n, state_p, state_g, first, actions)
+    rows = np.arange(first, n)
+    want = goals[rows] - pos[rows]
+    before = kept_prev[rows].copy()
+    before[new - first] = s[new]
+    expect, _ = agent.decide_batch(s[rows], before, want, np.hypot(*want.T), recognise=False)
+    stale, _ = agent.decide_batch(s[rows], kept_prev[rows], want, np.hypot(*want.T),
+                                  recognise=False)  # fmt: skip
+    on = active[rows]
+    assert np.array_equal(actions[rows][on], expect[on])
+    assert not np.array_equal(stale[on], expect[on])  # the stale readings would mislead
+    assert (actions[:first] == 7.0).all() and (actions[rows][~on] == 7.0).all()
+    assert np.array_equal(state_p[on], s[rows][on]) and np.array_equal(state_g[on], goals[rows][on])
+    assert np.array_equal(state_p[~on], kept_prev[first:][~on])  # out of the world: untouched
+    bad = s.copy()
+    bad[first + 8] = np.nan
+    active[first + 8] = True
+    with pytest.raises(InvalidArgumentError, match=f"agent {first + 8}'s"):
+        agent.decide_rows(bad, pos, goals, active, first, n, state_p, state_g, first, actions)
+    agent.beta = 0.5
+    with pytest.raises(InvalidArgumentError, match="beta must be 0"):
+        agent.decide_rows(s, pos, goals, active, first, n, state_p, state_g, first, actions)
+
+
 def test_a_policy_lasts_while_the_reading_stays_within_its_landmark(learnt) -> None:
     from copi.online import _learnt_kernels
 

@@ -4,7 +4,9 @@ and how the agents are shared out among processes, one per core.
 Two drivers answer one call, ``decide(crowd, out)``, for the agents of one slice:
 
 - :class:`BatchDriver`: copi's learnt agent (:class:`copi.online.LearntAgent`) deciding
-  for all of them in one compiled call (:meth:`~copi.online.LearntAgent.decide_batch`);
+  for all of them in one compiled call (:meth:`~copi.online.LearntAgent.decide_rows`, on
+  the crowd's own arrays; :meth:`~copi.online.LearntAgent.decide_batch` when the choice
+  uses the context);
 - :class:`AgentsDriver`: any registered method, one :class:`~copi.core.Agent` per crowd
   agent, each asked through its own ``act`` (slower, the same contract as an episode).
 
@@ -97,7 +99,9 @@ class BatchDriver(Driver):
     """copi's learnt agent deciding for every agent of the slice in one call: the decision
     :meth:`LearntAgent.act` makes for each (its reading, its previous one, the straight
     line to its goal), without the context search when the choice does not use it
-    (``beta`` 0, as copi-learnt is registered)."""
+    (``beta`` 0, as copi-learnt is registered: :meth:`LearntAgent.decide_rows`, in place
+    on the crowd's arrays; measured, the dozen array operations a batch it spares cost
+    about a tenth of the decision time at 250 agents a batch)."""
 
     def __init__(self, agent: LearntAgent, crowd: Crowd, lo: int, hi: int) -> None:
         super().__init__(lo, hi)
@@ -112,6 +116,19 @@ class BatchDriver(Driver):
     def share(self, keep: list[mmap.mmap]) -> None:
         self.prev = _shared(self.prev, keep)
         self.goal = _shared(self.goal, keep)
+
+    def decide(self, crowd: Crowd, out: NDArray[np.float64], lo: int | None = None,
+               hi: int | None = None) -> None:  # fmt: skip
+        if self.agent.beta > 0.0:  # the context is recognised: decide_batch
+            super().decide(crowd, out, lo, hi)
+            return
+        lo = self.lo if lo is None else lo
+        hi = self.hi if hi is None else hi
+        t0 = time.perf_counter()
+        self.agent.decide_rows(crowd.ranges, crowd.positions, crowd.goals, crowd.active, lo,
+                               hi, self.prev, self.goal, self.lo, out)  # fmt: skip
+        self.seconds += time.perf_counter() - t0
+        self.decisions += int(np.count_nonzero(crowd.active[lo:hi]))
 
     def _decide(self, crowd: Crowd, rows: NDArray[np.intp]) -> NDArray[np.float64]:
         r: Any = rows

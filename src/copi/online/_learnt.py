@@ -269,6 +269,46 @@ class LearntAgent(Agent):
         nodes = out[:, 2].astype(np.int64) if recognise else np.full(b, -1, dtype=np.int64)
         return out[:, :2].copy(), nodes
 
+    def decide_rows(
+        self,
+        ranges: NDArray[np.float64],
+        positions: NDArray[np.float64],
+        goals: NDArray[np.float64],
+        active: NDArray[np.bool_],
+        lo: int,
+        hi: int,
+        previous: NDArray[np.float64],
+        previous_goal: NDArray[np.float64],
+        first: int,
+        actions: NDArray[np.float64],
+    ) -> None:
+        """:meth:`decide_batch` (``recognise=False``: ``beta`` must be 0) for the agents
+        ``lo .. hi - 1`` still ``active`` of arrays many agents share (a crowd's, rows of
+        shape (N, ...)), in place and in one compiled call: agent i's desired direction
+        is the straight line from ``positions[i]`` to ``goals[i]`` (within its length),
+        its previous reading ``previous[i - first]``, taken for the goal
+        ``previous_goal[i - first]`` (another goal is a new task, with no previous
+        reading); its velocity goes to ``actions[i]``, its reading and goal to
+        ``previous`` and ``previous_goal``. The same decisions as :meth:`decide_batch`
+        (tested)."""
+        if self.beta > 0.0:
+            raise InvalidArgumentError(
+                f"decide_rows decides without recognising the context: beta must be 0; "
+                f"got {self.beta:g}"
+            )
+        n = self.capabilities.n_rays
+        if ranges.ndim != 2 or ranges.shape[1] != n:
+            raise InvalidArgumentError(f"readings must have shape (N, {n}); got {ranges.shape}")
+        bad = _learnt_kernels.decide_learnt_rows(
+            ranges, positions, goals, active, int(lo), int(hi), previous, previous_goal,
+            int(first), self._prior, self._net, self.guard, self.alpha, self.beta, self.wait,
+            self._cos, self._sin, self.max_range, self._compass, self._feat, self._p, actions,
+            self.model.static_aware,
+        )  # fmt: skip
+        if bad >= 0:
+            raise InvalidArgumentError(f"readings must be finite and >= 0; agent {bad}'s "
+                                       "is not")  # fmt: skip
+
     def _grow(self, s: NDArray[np.float64]) -> None:
         """Learn an unfamiliar context into the grown part of the context map."""
         if self._growth is None:

@@ -114,6 +114,50 @@ def decide_learnt_batch(  # type: ignore[no-untyped-def]
         )  # fmt: skip
 
 
+@njit(cache=True)
+def decide_learnt_rows(  # type: ignore[no-untyped-def]
+    ranges, positions, goals, active, lo, hi, prev, prev_goal, first, node_prior, net, guard,
+    alpha, beta, wait, cos, sin, max_range, compass, feat, p, actions, static_aware,
+):
+    """:func:`decide_learnt_batch` without recognition (``beta`` 0) for the agents
+    ``lo .. hi - 1`` still ``active`` of arrays many agents share (a crowd's), in place:
+    agent i reads ``ranges[i]``, aims at ``goals[i]`` from ``positions[i]`` (the straight
+    line, as far as the goal), its previous reading is ``prev[i - first]``, taken for
+    the goal ``prev_goal[i - first]`` (another goal is a new task: no previous reading);
+    its velocity goes to ``actions[i]``, its reading and goal to ``prev`` and
+    ``prev_goal``. One compiled call a batch instead of a dozen array operations.
+    Returns the first agent whose reading is unusable (not finite, negative), else -1."""
+    n = ranges.shape[1]
+    work = _work(n, node_prior.shape[1])
+    static = work[4, :n]  # no static reading (inf)
+    out = np.empty(5)
+    for i in range(lo, hi):
+        if not active[i]:
+            continue
+        k = i - first
+        x = ranges[i]
+        pv = prev[k]
+        if prev_goal[k, 0] != goals[i, 0] or prev_goal[k, 1] != goals[i, 1]:
+            for j in range(n):
+                pv[j] = x[j]
+        if not _learnt_inputs(x, pv, static, out):
+            return i
+        wx = goals[i, 0] - positions[i, 0]
+        wy = goals[i, 1] - positions[i, 1]
+        _learnt_choose(
+            x, pv, static, -3, np.nan, node_prior, net, wx, wy, np.hypot(wx, wy), guard,
+            alpha, beta, wait, cos, sin, max_range, compass, feat, p, out, True, -1, 0.0,
+            work, static_aware,
+        )  # fmt: skip
+        actions[i, 0] = out[0]
+        actions[i, 1] = out[1]
+        for j in range(n):
+            pv[j] = x[j]
+        prev_goal[k, 0] = goals[i, 0]
+        prev_goal[k, 1] = goals[i, 1]
+    return -1
+
+
 @njit(cache=True, inline="always")
 def _work(n, n_dir):  # type: ignore[no-untyped-def]
     """Scratch of :func:`_learnt_choose` for ``n`` rays and ``n_dir`` directions (one

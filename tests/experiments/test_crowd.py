@@ -36,8 +36,10 @@ def _rows(path: Path) -> list[tuple[object, ...]]:
         )
 
 
-@pytest.mark.parametrize("steady", [False, True])
-def test_batched_decisions_are_each_agent_s_own(learnt_caps: Path, steady: bool) -> None:
+@pytest.mark.parametrize(("steady", "beta"), [(False, 0.0), (True, 0.0), (True, 0.5)])
+def test_batched_decisions_are_each_agent_s_own(learnt_caps: Path, steady: bool,
+                                                beta: float) -> None:  # fmt: skip
+    # beta 0: decide_rows on the crowd's arrays; beta > 0: decide_batch, the context recognised
     caps = Capabilities.load(learnt_caps)
     cfg = _config(learnt_caps, agents=80, densities=(0.2,), steady=steady)
     paths = []
@@ -46,11 +48,11 @@ def test_batched_decisions_are_each_agent_s_own(learnt_caps: Path, steady: bool)
 
         def make(lo: int, hi: int, kind: str = kind, crowd: object = crowd) -> object:
             if kind == "batch":
-                agent = make_agent("copi-learnt", caps)
+                agent = make_agent("copi-learnt", caps, beta=beta)
                 assert isinstance(agent, LearntAgent)
                 return BatchDriver(agent, crowd, lo, hi)  # type: ignore[arg-type]
             spec = method_spec("copi-learnt")
-            return AgentsDriver(lambda: spec.make(caps), crowd, "sensor", lo, hi)  # type: ignore[arg-type]
+            return AgentsDriver(lambda: spec.make(caps, beta=beta), crowd, "sensor", lo, hi)  # type: ignore[arg-type]
 
         with Team(crowd, make) as team:  # type: ignore[arg-type]
             for _ in range(25):

@@ -89,7 +89,7 @@ class Driver:
         raise NotImplementedError
 
 
-def _aim(crowd: Crowd, rows: NDArray[np.intp]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def _aim(crowd: Crowd, rows: Any) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """The straight line to each goal (the route in a convex room) and its length."""
     want = crowd.goals[rows] - crowd.positions[rows]
     return want, np.hypot(want[:, 0], want[:, 1])
@@ -141,8 +141,7 @@ class BatchDriver(Driver):
         fresh = np.flatnonzero((self.goal[k] != goals).any(axis=1))
         if len(fresh):
             self.prev[k.start + fresh if isinstance(k, slice) else k[fresh]] = s[fresh]
-        want = goals - crowd.positions[r]
-        reach = np.hypot(want[:, 0], want[:, 1])
+        want, reach = _aim(crowd, r)
         acts, _ = self.agent.decide_batch(s, self.prev[k], want, reach,
                                           recognise=self.agent.beta > 0.0)  # fmt: skip
         self.prev[k] = s

@@ -343,6 +343,10 @@ def test_rows_of_shared_arrays_are_decided_as_a_batch(learnt) -> None:
     active[first + 8] = True
     with pytest.raises(InvalidArgumentError, match=f"agent {first + 8}'s"):
         agent.decide_rows(bad, pos, goals, active, first, n, state_p, state_g, first, actions)
+    with pytest.raises(InvalidArgumentError, match=r"positions must have shape \(60, 2\)"):
+        agent.decide_rows(s, pos[:-1], goals, active, first, n, state_p, state_g, first, actions)
+    with pytest.raises(InvalidArgumentError, match="rows lo .. hi - 1 must lie within"):
+        agent.decide_rows(s, pos, goals, active, first - 1, n, state_p, state_g, first, actions)
     agent.beta = 0.5
     with pytest.raises(InvalidArgumentError, match="beta must be 0"):
         agent.decide_rows(s, pos, goals, active, first, n, state_p, state_g, first, actions)

@@ -299,6 +299,22 @@ class LearntAgent(Agent):
         n = self.capabilities.n_rays
         if ranges.ndim != 2 or ranges.shape[1] != n:
             raise InvalidArgumentError(f"readings must have shape (N, {n}); got {ranges.shape}")
+        big = len(ranges)
+        m = len(previous)
+        lo, hi, first = int(lo), int(hi), int(first)
+        shapes = {
+            "positions": (positions, (big, 2)), "goals": (goals, (big, 2)),
+            "active": (active, (big,)), "actions": (actions, (big, 2)),
+            "previous": (previous, (m, n)), "previous_goal": (previous_goal, (m, 2)),
+        }  # fmt: skip
+        for key, (a, want) in shapes.items():
+            if a.shape != want:
+                raise InvalidArgumentError(f"{key} must have shape {want}; got {a.shape}")
+        if not (0 <= first <= lo <= hi <= big and hi - first <= m):
+            raise InvalidArgumentError(
+                f"rows lo .. hi - 1 must lie within the N = {big} agents and the "
+                f"{m} previous readings from agent {first}; got lo {lo}, hi {hi}"
+            )
         bad = _learnt_kernels.decide_learnt_rows(
             ranges, positions, goals, active, int(lo), int(hi), previous, previous_goal,
             int(first), self._prior, self._net, self.guard, self.alpha, self.beta, self.wait,

@@ -85,6 +85,8 @@ def _learnt(rate: dict, fam: str, peer: str) -> bool:
     at = rate[fam, peer, "map"]
     return (100 * (at - rate[fam, "straight", "map"]) >= 30
             and 100 * (at - rate[fam, "compass-guard", "map"]) >= GOAL_TO_GUARD[fam])
+
+
 EVADERS = ["learnt", "compass-guard", "ppo", "ppo-guard", "ppo-chauffeur", "game"]
 
 

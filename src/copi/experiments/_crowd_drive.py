@@ -89,7 +89,7 @@ class Driver:
         raise NotImplementedError
 
 
-def _aim(crowd: Crowd, rows: Any) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def _aim(crowd: Crowd, rows: NDArray[np.intp]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """The straight line to each goal (the route in a convex room) and its length."""
     want = crowd.goals[rows] - crowd.positions[rows]
     return want, np.hypot(want[:, 0], want[:, 1])
@@ -131,21 +131,15 @@ class BatchDriver(Driver):
         self.decisions += int(np.count_nonzero(crowd.active[lo:hi]))
 
     def _decide(self, crowd: Crowd, rows: NDArray[np.intp]) -> NDArray[np.float64]:
-        r: Any = rows
-        k: Any = rows - self.lo
-        if rows[-1] - rows[0] + 1 == len(rows):  # consecutive (a steady crowd): views
-            r = slice(int(rows[0]), int(rows[-1]) + 1)
-            k = slice(r.start - self.lo, r.stop - self.lo)
-        s = crowd.ranges[r]
-        goals = crowd.goals[r]
-        fresh = np.flatnonzero((self.goal[k] != goals).any(axis=1))
-        if len(fresh):
-            self.prev[k.start + fresh if isinstance(k, slice) else k[fresh]] = s[fresh]
-        want, reach = _aim(crowd, r)
+        k = rows - self.lo
+        s = crowd.ranges[rows]
+        fresh = (self.goal[k] != crowd.goals[rows]).any(axis=1)
+        self.prev[k[fresh]] = s[fresh]
+        want, reach = _aim(crowd, rows)
         acts, _ = self.agent.decide_batch(s, self.prev[k], want, reach,
                                           recognise=self.agent.beta > 0.0)  # fmt: skip
         self.prev[k] = s
-        self.goal[k] = goals
+        self.goal[k] = crowd.goals[rows]
         return acts
 
 

@@ -27,6 +27,9 @@ from numba import njit
 
 from copi.geometry.kernels import _scan_into, closest_approach, move_one, ray_disc
 
+RUNNING, SUCCESS, COLLISION = 0, 1, 2
+"""A trip's outcome, as :attr:`copi.world.crowd.Crowd.outcome` holds it."""
+
 
 @njit(cache=True, inline="always")
 def _cell(v, v0, h, n):  # type: ignore[no-untyped-def]
@@ -256,7 +259,7 @@ def account(positions, old, goals, was, gap, tolerance, t, leave, velocities, pa
     """The books of step ``t`` (the step just taken, from ``old`` to ``positions``, by
     the agents ``was`` in the world) in one pass: each agent's velocity, path length,
     contacts (``gap`` below 0), least gap, arrivals (within ``tolerance`` of its goal),
-    its first trip's outcome (1 success, 2 collision), end and length; with ``leave``,
+    its first trip's outcome (:data:`SUCCESS`, :data:`COLLISION`), end and length; with ``leave``,
     an agent whose trip ended leaves (``active``). ``contact``, ``reached`` and ``left``
     receive the step's flags. The same sums, in the same order, as the arrays'."""
     for i in range(positions.shape[0]):
@@ -275,8 +278,8 @@ def account(positions, old, goals, was, gap, tolerance, t, leave, velocities, pa
         if gap[i] < min_gap[i]:
             min_gap[i] = gap[i]
         arrivals[i] += r
-        if was[i] and outcome[i] == 0 and (c or r):
-            outcome[i] = 2 if c else 1
+        if was[i] and outcome[i] == RUNNING and (c or r):
+            outcome[i] = COLLISION if c else SUCCESS
             ended[i] = t
             trip_length[i] = path_length[i]
         left[i] = leave and was[i] and (c or r)

@@ -75,7 +75,7 @@ _TRIES_PER_AGENT = 200
 """Candidates drawn per agent before placement gives up (random sequential placement
 needs a few at moderate density, hundreds near its limit)."""
 
-RUNNING, SUCCESS, COLLISION = 0, 1, 2
+RUNNING, SUCCESS, COLLISION = kernels.RUNNING, kernels.SUCCESS, kernels.COLLISION
 """A trip's outcome codes (:attr:`Crowd.outcome`); a trip still running at the step
 limit is a timeout."""
 

@@ -232,6 +232,34 @@ def test_pursuit_command(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> 
     assert code == 2 and "evader must be one of capability, learnt, game; got 'ghost'" in err and "Traceback" not in err
 
 
+@pytest.mark.parametrize("name", ["learnt", "learnt-motion", "predictive"])
+def test_learn_with_a_preset_learns_all_the_preset_learns(
+    name: str, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``copi learn --preset P`` learns what P's method needs (the predictive preset: the
+    model of what moves and the safety networks with the static reading); the learning
+    itself is replaced by a recorder (the presets' own learning is tested elsewhere)."""
+    import copi.learning
+    from copi.methods import preset
+
+    seen = []
+
+    class Stop(Exception):
+        pass
+
+    def record(params, progress=None):  # type: ignore[no-untyped-def]
+        seen.append(params)
+        raise Stop
+
+    monkeypatch.setattr(copi.learning, "learn", record)
+    with pytest.raises(Stop):
+        run(["learn", "-o", str(tmp_path / "c.npz"), "--preset", name], capsys)
+    want = preset(name).learn
+    (got,) = seen
+    for key in ("directions", "safety", "safety_static", "motion", "predict"):
+        assert getattr(got, key) == getattr(want, key), key
+
+
 def test_presets_set_a_mode_whole(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     caps = tmp_path / "ext.npz"
     code, _, err = run(["learn", "-o", str(caps), "--worlds", "6", "--steps", "120",

@@ -69,6 +69,52 @@ def test_sampled_futures_move_at_the_speed_and_walls_stop_them(model: MotionMode
     assert np.array_equal(f, same)  # the same seed, the same futures
 
 
+def test_futures_far_from_walls_skip_the_sweep_and_stay_the_same(model: MotionModel) -> None:
+    """Where the clearance grid says no wall is within a step, a body's move is not swept
+    against the walls: the futures are those of sweeping every move (no grid), bit for
+    bit, in a room whose walls many futures reach."""
+    from copi.geometry import clearance
+
+    room = World([[0, 0], [12, 0], [12, 6], [6, 6], [6, 12], [0, 12]])
+    segs = np.ascontiguousarray(room.segments)
+    bodies = np.array([[3.0, 3.0, 0.3, 1.0, 0.8, 0.5], [9.0, 2.0, 2.0, 1.0, 1.2, 0.7],
+                       [2.0, 10.0, 0.0, 0.0, 0.6, 0.4]])  # fmt: skip
+    h = 0.125
+    gy, gx = np.mgrid[0:100, 0:100]
+    pts = np.column_stack([h * gx.ravel(), h * gy.ravel()])
+    clear = np.where(room.contains(pts), clearance(pts, segs), 0.0).reshape(100, 100)
+    fast = sample_motion(bodies, segs, 48, 30, 5, *motion_tables(model), clear, 0.0, 0.0, h)
+    swept = sample_motion(bodies, segs, 48, 30, 5, *motion_tables(model), np.zeros((1, 1)),
+                          0.0, 0.0, 1.0)  # fmt: skip
+    assert np.array_equal(fast, swept)
+    step = np.hypot(*np.diff(fast, axis=1).transpose(3, 0, 1, 2))
+    assert (step < bodies[:, 4] - 1e-6).any()  # walls stopped some moves: both paths ran
+
+
+def test_a_circle_fit_agrees_with_scipys_least_squares() -> None:
+    """The tracker's circle of a given radius through noisy arcs: the centre scipy's
+    least_squares finds from the same start, to 1e-6."""
+    from scipy.optimize import least_squares
+
+    from copi.learning import fit_circle
+
+    rng = np.random.default_rng(4)
+    for _ in range(200):
+        k = int(rng.integers(3, 12))
+        c, r = rng.uniform(-5, 5, 2), float(rng.choice([0.4, 0.6, 0.8, 1.0]))
+        ang = rng.uniform(0, 2 * math.pi) + np.linspace(0, rng.uniform(0.3, 2.0), k)
+        pts = c + r * np.column_stack([np.cos(ang), np.sin(ang)]) + rng.normal(0, 0.01, (k, 2))
+        c0 = c + rng.normal(0, 0.1, 2)
+        got, err = fit_circle(pts, r, c0)
+        want = least_squares(lambda q, p=pts, r=r: np.hypot(*(p - q).T) - r, c0, xtol=1e-14,
+                             ftol=1e-14, gtol=1e-14).x  # fmt: skip
+        assert np.allclose(got, want, atol=1e-6), (got, want)
+        assert err == pytest.approx(np.mean((np.hypot(*(pts - got).T) - r) ** 2))
+    # two points on a line through the start: the least-norm step, no division by zero
+    got, _ = fit_circle(np.array([[1.0, 0.0], [2.0, 0.0]]), 0.5, np.array([0.0, 0.0]))
+    assert np.isfinite(got).all()
+
+
 def test_the_tracker_follows_a_body_and_measures_its_speed() -> None:
     room = World([[0, 0], [30, 0], [30, 30], [0, 30]])
     sensor = RangeSensor()

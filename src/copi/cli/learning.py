@@ -49,7 +49,8 @@ def learn_command(
         typer.Option(
             "--preset",
             help="Learn for a mode: learnt (the default: 16 directions and safety priors), "
-            "faithful (the paper's: 4 directions), extended (16), learnt-motion.",
+            "faithful (the paper's: 4 directions), extended (16), learnt-motion, predictive "
+            "(a model of what moves, for copi-predictive).",
         ),
     ] = None,
     probe_worlds: Annotated[
@@ -115,8 +116,12 @@ def learn_command(
             f"--motion needs --preset learnt-motion (got {preset or 'no preset'}): only the "
             "learnt preset's agent recognises contexts that see motion"
         )
-    if preset is not None:
-        motion = get_preset(preset).learn.motion
+    predict = False
+    if preset is not None:  # what the preset learns beyond the options
+        chosen = get_preset(preset).learn
+        motion = chosen.motion
+        predict = chosen.predict
+        safety_static = safety_static or chosen.safety_static
     params = LearnParams(
         worlds=worlds,
         steps=steps,
@@ -135,6 +140,7 @@ def learn_command(
         probe_families=probe_families,
         probe_label=probe_label,
         safety_static=safety_static,
+        predict=predict,
     )
     check_outputs({"the capabilities file": (output, "capabilities")})
     output.parent.mkdir(parents=True, exist_ok=True)

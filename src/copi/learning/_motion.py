@@ -322,8 +322,11 @@ def sample_motion(  # type: ignore[no-untyped-def]
             for t in range(horizon):
                 ci = int(math.floor((y - cy0) / ch + 0.5))
                 cj = int(math.floor((x - cx0) / ch + 0.5))
+                # how far every wall is at least (the grid's cell centre's clearance, less
+                # the most a point of the cell can be nearer)
+                far = clear[ci, cj] - slack if 0 <= ci < cny and 0 <= cj < cnx else -1.0
                 room = 1e3
-                if not (0 <= ci < cny and 0 <= cj < cnx and clear[ci, cj] - slack > 4.0 + rk):
+                if not far > 4.0 + rk:
                     room = sweep_one(x, y, math.cos(h), math.sin(h), local, rk)
                 b = _draw(turn_cdf[_edge_bin(ahead_edges, room)])
                 h += -math.pi + (b + np.random.random()) * width
@@ -331,8 +334,11 @@ def sample_motion(  # type: ignore[no-untyped-def]
                     v = _speed_in(speed_edges, _draw(speed_cdf[_edge_bin(speed_edges, v)]))
                 dx = math.cos(h)
                 dy = math.sin(h)
-                go = sweep_one(x, y, dx, dy, local, rk)
-                step = min(v, max(go - 1e-6, 0.0))
+                if far > rk + v + 1e-3:  # no wall within reach: the sweep would not stop it
+                    step = v
+                else:
+                    go = sweep_one(x, y, dx, dy, local, rk)
+                    step = min(v, max(go - 1e-6, 0.0))
                 x += step * dx
                 y += step * dy
                 out[s, t + 1, k, 0] = x

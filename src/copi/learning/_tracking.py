@@ -9,6 +9,7 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
+from numba import njit
 from numpy.typing import NDArray
 
 from copi.core import EXPLAINED
@@ -24,21 +25,71 @@ JOIN = 0.8
 WELL = 3
 """Rays on a body for its fit (and its displacement) to count as measured."""
 
+
 def fit_circle(
     pts: NDArray[np.float64], r: float, c0: NDArray[np.float64]
 ) -> tuple[NDArray[np.float64], float]:
     """Centre of the circle of radius ``r`` through ``pts`` (Gauss-Newton from ``c0``) and
-    its mean squared residual. Eight Gauss-Newton steps written out, because
-    scipy.optimize.least_squares costs more to call than this whole fit of a few points."""
-    c = c0.copy()
+    its mean squared residual."""
+    p = np.ascontiguousarray(pts, dtype=np.float64)
+    cx, cy, err = _fit_circle(p, float(r), float(c0[0]), float(c0[1]))
+    return np.array([cx, cy]), float(err)
+
+
+@njit(cache=True)
+def _fit_circle(pts, r, cx, cy):  # type: ignore[no-untyped-def]
+    """Eight Gauss-Newton steps of the fit of :func:`fit_circle`, each the least-squares
+    solution of a two-unknown linear system by its normal equations (the least-norm one
+    when they are singular: all points on one line through the centre). Written out and
+    compiled, because a general solver (numpy's lstsq, scipy's least_squares) costs more
+    to call than this whole fit of a few points; a tracker fits every arc with seven
+    radii each step."""
+    k = pts.shape[0]
     for _ in range(8):
-        d = pts - c
-        n = np.sqrt((d**2).sum(axis=1)) + 1e-12
-        jac = -d / n[:, None]
-        step = np.linalg.lstsq(jac, -(n - r), rcond=None)[0]
-        c = c + step
-    d = pts - c
-    return c, float(((np.sqrt((d**2).sum(axis=1)) - r) ** 2).mean())
+        a11 = 0.0
+        a12 = 0.0
+        a22 = 0.0
+        b1 = 0.0
+        b2 = 0.0
+        for i in range(k):
+            dx = pts[i, 0] - cx
+            dy = pts[i, 1] - cy
+            n = math.sqrt(dx * dx + dy * dy) + 1e-12
+            jx = -dx / n  # the residual's gradient in the centre
+            jy = -dy / n
+            res = n - r
+            a11 += jx * jx
+            a12 += jx * jy
+            a22 += jy * jy
+            b1 -= jx * res
+            b2 -= jy * res
+        det = a11 * a22 - a12 * a12
+        tr = a11 + a22
+        if det > 1e-12 * tr * tr:
+            sx = (a22 * b1 - a12 * b2) / det
+            sy = (a11 * b2 - a12 * b1) / det
+        elif tr > 0.0:  # rank one: A = tr u u^T, b along u; the least-norm step
+            if a11 >= a22:
+                ux, uy = a11, a12
+            else:
+                ux, uy = a12, a22
+            un = math.sqrt(ux * ux + uy * uy)
+            ux /= un
+            uy /= un
+            f = (ux * b1 + uy * b2) / tr
+            sx = f * ux
+            sy = f * uy
+        else:
+            break
+        cx += sx
+        cy += sy
+    err = 0.0
+    for i in range(k):
+        dx = pts[i, 0] - cx
+        dy = pts[i, 1] - cy
+        e = math.sqrt(dx * dx + dy * dy) - r
+        err += e * e
+    return cx, cy, err / k
 
 
 def detect_discs(

@@ -316,7 +316,36 @@ def escape_move(  # type: ignore[no-untyped-def]
     return best, best_cost, best_hit
 
 
-@njit(cache=True, nogil=True)  # nogil: many agents plan at once in threads
+_LANES = 16
+"""Samples :func:`hindsight_values` solves at once (16 ran faster than 4 and 8, as fast as
+32, on 32 futures of crowd episodes)."""
+
+
+@njit(cache=True, nogil=True)
+def _block_layer(samples, t, radii, agent_r, margin, x0, y0, res, lo, hi, pad, m, V):  # type: ignore[no-untyped-def]
+    """Sets lane s of cell (i, j) of the flat buffer ``V`` (index ``((pad + i) * m + pad +
+    j) * _LANES + s``) to inf where, in sample s at step t, some disc is within the sum of
+    radii plus ``margin`` of the cell's centre (origin x0, y0, side ``res``), for the
+    cells with lo <= i, j <= hi (the test of :func:`_mark_contacts`)."""
+    for s in range(samples.shape[0]):
+        for k in range(samples.shape[2]):
+            reach = agent_r + radii[k] + margin
+            cx = samples[s, t, k, 0]
+            cy = samples[s, t, k, 1]
+            j0 = max(int(math.ceil((cx - reach - x0) / res)), lo)
+            j1 = min(int(math.floor((cx + reach - x0) / res)), hi)
+            i0 = max(int(math.ceil((cy - reach - y0) / res)), lo)
+            i1 = min(int(math.floor((cy + reach - y0) / res)), hi)
+            r2 = reach * reach
+            for i in range(i0, i1 + 1):
+                py = y0 + i * res - cy
+                for j in range(j0, j1 + 1):
+                    px = x0 + j * res - cx
+                    if px * px + py * py <= r2:
+                        V[((pad + i) * m + pad + j) * _LANES + s] = np.inf
+
+
+@njit(cache=True, nogil=True, fastmath={"nnan"})  # nogil: many agents plan at once in threads
 def hindsight_values(  # type: ignore[no-untyped-def]
     samples, radii, agent_r, margin, x0, y0, res, ok, terminal, goal, offsets, mid_ok, cap,
     box=-1,
@@ -340,26 +369,45 @@ def hindsight_values(  # type: ignore[no-untyped-def]
     ``box`` >= 0: only the cells an agent starting at the window's centre can be in are
     solved, those within ``box`` + 2 t cells of the centre at step t (a move goes at most
     2 cells: ``offsets``); the values there are those of the whole window, the rest of
-    step 1 is left infinite. ``box`` < 0: the whole window."""
+    step 1 is left infinite. ``box`` < 0: the whole window.
+
+    The samples are solved :data:`_LANES` at a time, stored sample-last (lane s of cell
+    (i, j)) in a grid padded by the longest move's reach: each cell's moves are tested for
+    walls once for all the lanes, with no test of the window's edge, and the lanes' minima
+    are one unrolled loop of fixed length. About 5x faster than one sample at a time, and
+    the same numbers bit for bit (the same minima over the same moves, the samples summed
+    in the same order)."""
     n_s = samples.shape[0]
     horizon = samples.shape[1] - 1
     n = ok.shape[0]
+    n_off = offsets.shape[0]
     c = n // 2
     lo1, hi1 = 0, n - 1  # the cells of step 1 solved
     if box >= 0:
         lo1 = max(c - box - 2, 0)
         hi1 = min(c + box + 2, n - 1)
-    blocked = np.zeros((horizon + 1, n, n), dtype=np.bool_)
-    Vn = np.empty((n, n))
-    Vc = np.full((n, n), np.inf)
-    step = np.ones((n, n))  # every move costs one step
+    pad = 0
+    for o in range(n_off):
+        pad = max(pad, abs(offsets[o, 0]), abs(offsets[o, 1]))
+    m = n + 2 * pad
     total = np.zeros((n, n))
-    for s in range(n_s):
-        blocked[:] = False
-        _mark_contacts(samples, s, radii, agent_r, margin, x0, y0, res, blocked)
+    L = _LANES
+    # flat buffers, indexed by hand: (row * m + column) * L + lane; the padding stays inf
+    Vn = np.full(m * m * L, np.inf)
+    Vc = np.full(m * m * L, np.inf)
+    delta = np.empty(n_off, dtype=np.int64)  # each move, as a step in the flat buffer
+    for o in range(n_off):
+        delta[o] = (offsets[o, 0] * m + offsets[o, 1]) * L
+    for s0 in range(0, n_s, L):
+        w = min(L, n_s - s0)
+        part = samples[s0 : s0 + w]
         for i in range(n):
             for j in range(n):
-                Vn[i, j] = terminal[i, j] if not blocked[horizon, i, j] else np.inf
+                tv = terminal[i, j]
+                base = ((pad + i) * m + pad + j) * L
+                for s in range(L):
+                    Vn[base + s] = tv
+        _block_layer(part, horizon, radii, agent_r, margin, x0, y0, res, 0, n - 1, pad, m, Vn)
         for t in range(horizon - 1, 0, -1):
             lo, hi = 0, n - 1
             if box >= 0:
@@ -367,17 +415,35 @@ def hindsight_values(  # type: ignore[no-untyped-def]
                 hi = min(c + box + 2 * t, n - 1)
             for i in range(lo, hi + 1):
                 for j in range(lo, hi + 1):
-                    if blocked[t, i, j] or not ok[i, j]:
-                        Vc[i, j] = np.inf
+                    base = ((pad + i) * m + pad + j) * L
+                    if not ok[i, j]:
+                        for s in range(L):
+                            Vc[base + s] = np.inf
                         continue
                     if goal[i, j]:
-                        Vc[i, j] = 0.0
+                        for s in range(L):
+                            Vc[base + s] = 0.0
                         continue
-                    Vc[i, j] = _best_move(Vn, step, i, j, offsets, mid_ok)
+                    for s in range(L):
+                        Vc[base + s] = np.inf
+                    for o in range(n_off):
+                        if not mid_ok[o, i, j]:
+                            continue
+                        src = base + delta[o]
+                        for s in range(L):
+                            v = Vn[src + s]
+                            u = Vc[base + s]
+                            Vc[base + s] = v if v < u else u
+                    for s in range(L):  # every move costs one step (inf stays inf)
+                        Vc[base + s] += 1.0
+            # blocked cells: inf, whatever else (a goal cell too)
+            _block_layer(part, t, radii, agent_r, margin, x0, y0, res, lo, hi, pad, m, Vc)
             Vn, Vc = Vc, Vn
         for i in range(lo1, hi1 + 1):
             for j in range(lo1, hi1 + 1):
-                total[i, j] += min(Vn[i, j], cap)
+                base = ((pad + i) * m + pad + j) * L
+                for s in range(w):  # in the samples' order
+                    total[i, j] += min(Vn[base + s], cap)
     V = np.full((horizon + 1, n, n), np.inf)
     for i in range(lo1, hi1 + 1):
         for j in range(lo1, hi1 + 1):

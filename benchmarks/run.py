@@ -3,6 +3,7 @@ printed is kept as docs/speed-run.md (generated; docs/speed.md quotes its tables
 
 from __future__ import annotations
 
+import argparse
 import os
 import platform
 import sys
@@ -31,13 +32,44 @@ BENCHMARKS = {
 }  # fmt: skip
 
 
-def main() -> int:
+def _sections(text: str) -> dict[str, list[str]]:
+    """The sections of a page this script wrote: {name: its lines, heading excluded}."""
+    out: dict[str, list[str]] = {}
+    name = None
+    for line in text.splitlines():
+        if line.startswith("## "):
+            name = line[3:].strip()
+            out[name] = []
+        elif name is not None and not line.startswith(("All goals met", "Goals missed in")):
+            out[name].append(line)
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--only", default=None,
+                    help=f"comma-separated benchmarks to run ({', '.join(BENCHMARKS)}); the "
+                    "page keeps the others' sections of its last run")  # fmt: skip
+    a = ap.parse_args(argv)
+    names = list(BENCHMARKS) if a.only is None else [x.strip() for x in a.only.split(",")]
+    unknown = [x for x in names if x not in BENCHMARKS]
+    if unknown:
+        ap.error(f"unknown benchmark {', '.join(unknown)}; expected some of "
+                 f"{', '.join(BENCHMARKS)}")  # fmt: skip
+    out = Path(__file__).resolve().parents[1] / "docs" / "speed-run.md"
+    kept = _sections(out.read_text(encoding="utf-8")) if a.only and out.exists() else {}
     results = {}
     page = ["# Speed, as `make bench` measured it", "",
             "<!-- generated: `make bench` (benchmarks/run.py) -->", "",
             f"Python {platform.python_version()}, {os.cpu_count()} cores; medians of repeated "
             "loops; every ratio measured in the same run. [Speed](speed.md) explains them.", ""]
     for name, module in BENCHMARKS.items():
+        if name not in names:
+            if name in kept:  # an earlier run's section, as it was
+                page += [f"## {name}", *kept[name]]
+                last = next((x for x in reversed(kept[name]) if x.strip()), "")
+                results[name] = last.endswith("goals met)")
+            continue
         RECORD.clear()
         t0 = time.perf_counter()
         results[name] = module.main()
@@ -47,7 +79,6 @@ def main() -> int:
     missed = [name for name, ok in results.items() if not ok]
     print("all goals met" if not missed else f"goals missed in: {', '.join(missed)}")
     page.append("All goals met." if not missed else f"Goals missed in: {', '.join(missed)}.")
-    out = Path(__file__).resolve().parents[1] / "docs" / "speed-run.md"
     out.write_text("\n".join(page) + "\n", encoding="utf-8")
     print(f"wrote {out.name}")
     return 1 if missed else 0

@@ -345,7 +345,7 @@ def _block_layer(samples, t, radii, agent_r, margin, x0, y0, res, lo, hi, pad, m
                         V[((pad + i) * m + pad + j) * _LANES + s] = np.inf
 
 
-@njit(cache=True, nogil=True, fastmath={"nnan"})  # nogil: many agents plan at once in threads
+@njit(cache=True, nogil=True)  # nogil: many agents plan at once in threads
 def hindsight_values(  # type: ignore[no-untyped-def]
     samples, radii, agent_r, margin, x0, y0, res, ok, terminal, goal, offsets, mid_ok, cap,
     box=-1,

@@ -288,6 +288,30 @@ def test_hindsight_values_equal_a_shortest_path_per_sampled_future(seed: int,
         assert not np.isfinite(part[~inner]).any()
 
 
+def test_hindsight_values_with_no_disc_solve_one_future_and_count_it_for_all() -> None:
+    """With no disc every sampled future is the same: the kernel solves one and counts it
+    for each; the values are networkx's, and bit for bit those of the same futures with a
+    disc far off the window (which the kernel solves one by one)."""
+    rng = np.random.default_rng(7)
+    n, horizon, res = 9, 5, 0.5
+    ok = rng.random((n, n)) > 0.15
+    mid_ok = rng.random((len(_OFFSETS), n, n)) > 0.1
+    terminal = np.where(ok, rng.uniform(0, 6, (n, n)), math.inf)
+    goal = np.zeros((n, n), dtype=bool)
+    goal[1, 2] = True
+    terminal[goal] = 0.0
+    none = np.zeros((33, horizon + 1, 0, 2))
+    got = hindsight_values(none, np.zeros(0), 0.3, 0.1, 0.0, 0.0, res, ok, terminal, goal,
+                           _OFFSETS, mid_ok, 40.0)[1]  # fmt: skip
+    want = _hindsight_by_graph(none[:2], np.zeros(0), 0.3, 0.1, res, ok, terminal, goal,
+                               _OFFSETS, mid_ok, 40.0)  # fmt: skip
+    np.testing.assert_allclose(got, want)
+    far = np.full((33, horizon + 1, 1, 2), 1e3)
+    alike = hindsight_values(far, np.array([0.5]), 0.3, 0.1, 0.0, 0.0, res, ok, terminal,
+                             goal, _OFFSETS, mid_ok, 40.0)[1]  # fmt: skip
+    np.testing.assert_array_equal(got, alike)
+
+
 def test_hindsight_values_of_a_known_corridor() -> None:
     """A corridor one cell wide, moves of one cell forward or waiting, the goal two cells
     ahead. In one sampled future the corridor is free (the goal in 2 steps); in the other

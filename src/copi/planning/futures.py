@@ -398,8 +398,10 @@ def hindsight_values(  # type: ignore[no-untyped-def]
     delta = np.empty(n_off, dtype=np.int64)  # each move, as a step in the flat buffer
     for o in range(n_off):
         delta[o] = (offsets[o, 0] * m + offsets[o, 1]) * L
-    for s0 in range(0, n_s, L):
-        w = min(L, n_s - s0)
+    # with no disc every future is the same: one is solved, and counted n_s times
+    n_solve = n_s if samples.shape[2] > 0 else min(n_s, 1)
+    for s0 in range(0, n_solve, L):
+        w = min(L, n_solve - s0)
         part = samples[s0 : s0 + w]
         for i in range(n):
             for j in range(n):
@@ -444,6 +446,10 @@ def hindsight_values(  # type: ignore[no-untyped-def]
                 base = ((pad + i) * m + pad + j) * L
                 for s in range(w):  # in the samples' order
                     total[i, j] += min(Vn[base + s], cap)
+    for _ in range(n_solve, n_s):  # the futures alike (no disc): the one solved, again
+        for i in range(lo1, hi1 + 1):
+            for j in range(lo1, hi1 + 1):
+                total[i, j] += min(Vn[((pad + i) * m + pad + j) * L], cap)
     V = np.full((horizon + 1, n, n), np.inf)
     for i in range(lo1, hi1 + 1):
         for j in range(lo1, hi1 + 1):

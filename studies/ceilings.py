@@ -5,9 +5,9 @@ model-predictive oracle beside every method, on the same episodes.
         --oracle-episodes 200 --out docs/ceilings.md
 
 Runs ``copi benchmark`` three times into one directory (resumable): every default method
-and ``clairvoyant`` on ``--episodes`` episodes per family, then ``model-oracle`` (1-3 s
-an episode), then the planners at level map (``tracked-mpc``, ``copi-predictive`` and its
-ablations) on
+and ``clairvoyant`` on ``--episodes`` episodes per family, then ``model-oracle`` (0.1-0.3 s
+an episode, median), then the planners at level map (``tracked-mpc``, ``copi-predictive``
+and its ablations) on
 the first ``--oracle-episodes``; the report pairs each row on the episodes both ran.
 Writes a summary: per family and level, the share solvable at all (the clairvoyant,
 the one bound), the reference planner (model-oracle: called a bound in a family only

@@ -162,15 +162,15 @@ def _register_builtins() -> None:
     reg("clairvoyant", Clairvoyant, sensing="future", default=True, bound=True,
         summary="a bound: space-time A* on the obstacles' recorded future (they ignore the "
         "agent), its plan replayed through the simulator: the share of episodes solvable")
-    # model-oracle costs 0.2-2 s an episode (10-20 ms a step): not in the default run; run it
+    # model-oracle costs 0.1-0.3 s an episode (median; up to 3 s): not in the default run; run it
     # on fewer episodes into the same directory, the report pairs it on those.
     # Not a bound: methods that know less match it in four families of five (docs/ceilings.md)
     reg("model-oracle", ModelOracle, sensing="oracle", default=False,
         summary="a reference planner, not a bound: model-predictive control on 32 sampled "
         "futures of the obstacles' random walk (its true parameters), each solved in hindsight "
         "and the costs averaged, replanned every step; knows the present and the motion model, "
-        "not the future (hand-written, tuned on seed 1; 1-3 s an episode, so run apart: "
-        "--methods model-oracle)")
+        "not the future (hand-written, tuned on seed 1; 0.1-0.3 s an episode, up to 3, so run "
+        "apart: --methods model-oracle)")
     margins = {"navground-hrvo": 0.6, "navground-hl": 0.3, "navground-orca": 0.3}
     for name, behavior in NAVGROUND_BEHAVIORS.items():
         reg(name, _navground(behavior), sensing="oracle", requires="peers",

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -113,6 +114,12 @@ def test_a_circle_fit_agrees_with_scipys_least_squares() -> None:
     # two points on a line through the start: the least-norm step, no division by zero
     got, _ = fit_circle(np.array([[1.0, 0.0], [2.0, 0.0]]), 0.5, np.array([0.0, 0.0]))
     assert np.isfinite(got).all()
+    for pts, r, c0, message in [(np.zeros((0, 2)), 0.5, np.zeros(2), "shape (k >= 1, 2)"),
+                                (np.zeros((3, 3)), 0.5, np.zeros(2), "shape (k >= 1, 2)"),
+                                (np.full((3, 2), np.nan), 0.5, np.zeros(2), "finite"),
+                                (np.zeros((3, 2)), -1.0, np.zeros(2), "positive radius")]:  # fmt: skip
+        with pytest.raises(InvalidArgumentError, match=re.escape(message)):
+            fit_circle(pts, r, c0)
 
 
 def test_the_tracker_follows_a_body_and_measures_its_speed() -> None:

@@ -32,7 +32,14 @@ def fit_circle(
     """Centre of the circle of radius ``r`` through ``pts`` (Gauss-Newton from ``c0``) and
     its mean squared residual."""
     p = np.ascontiguousarray(pts, dtype=np.float64)
-    cx, cy, err = _fit_circle(p, float(r), float(c0[0]), float(c0[1]))
+    c = np.asarray(c0, dtype=np.float64)
+    if p.ndim != 2 or p.shape[0] < 1 or p.shape[1] != 2 or c.shape != (2,):
+        raise InvalidArgumentError(f"fit_circle needs points of shape (k >= 1, 2) and a start "
+                                   f"of shape (2,); got {p.shape} and {c.shape}")  # fmt: skip
+    if not (np.isfinite(p).all() and np.isfinite(c).all() and math.isfinite(r) and r > 0):
+        raise InvalidArgumentError("fit_circle needs finite points and start and a positive "
+                                   f"radius; got radius {r!r}")  # fmt: skip
+    cx, cy, err = _fit_circle(p, float(r), float(c[0]), float(c[1]))
     return np.array([cx, cy]), float(err)
 
 

@@ -32,7 +32,7 @@ from copi.geometry.kernels import (
     sweep_one,
 )
 from copi.planning._field import GoalField, field_at
-from copi.planning._hindsight import hindsight_values
+from copi.planning._hindsight import covers, disc_cells, hindsight_values
 from copi.world import World
 
 __all__ = [
@@ -80,16 +80,10 @@ def _mark_contacts(samples, s, radii, agent_r, margin, x0, y0, res, blocked):  #
             reach = agent_r + radii[k] + margin
             cx = samples[s, t, k, 0]
             cy = samples[s, t, k, 1]
-            j0 = max(int(math.ceil((cx - reach - x0) / res)), 0)
-            j1 = min(int(math.floor((cx + reach - x0) / res)), n - 1)
-            i0 = max(int(math.ceil((cy - reach - y0) / res)), 0)
-            i1 = min(int(math.floor((cy + reach - y0) / res)), n - 1)
-            r2 = reach * reach
+            i0, i1, j0, j1 = disc_cells(cx, cy, reach, x0, y0, res, 0, n - 1)
             for i in range(i0, i1 + 1):
-                py = y0 + i * res - cy
                 for j in range(j0, j1 + 1):
-                    px = x0 + j * res - cx
-                    if px * px + py * py <= r2:
+                    if covers(cx, cy, reach, x0, y0, res, i, j):
                         blocked[t, i, j] = True
 
 

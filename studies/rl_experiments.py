@@ -69,7 +69,8 @@ SAC_FAMILIES = tuple(f for f in FAMILIES if f"sac-{f}-map" in method_names()
 METHODS = ["copi-learnt", "compass-guard", "dwa", "straight", "ppo", "ppo-guard",
            *[f"ppo-{f}" for f in FAMILIES], "copi-predictive@map",
            *[f"ppo-{f}-map" for f in FAMILIES], *[f"ppo-guard-{f}-map" for f in FAMILIES],
-           *[f"sac-{f}-map" for f in SAC_FAMILIES]]
+           *[f"sac-{f}-map" for f in SAC_FAMILIES],
+           *(["sarl@oracle"] if method_spec("sarl").available() else [])]
 """The first peer (``ppo``, ``ppo-F``: the ranges and their change, sensor and map mixed),
 the second (``ppo-F-map``: map's reading, one policy per level) and the second algorithm
 (``sac-F-map``: the same observation, learnt by SAC), each beside the copi method that,
@@ -249,6 +250,77 @@ def sac_lines(succ: dict, rate: dict) -> list[str]:
         "",
         *[f"![sac-{f}-map](rl-curve-sac-{f}-map.png)" for f in SAC_FAMILIES
           if (DOCS / f"rl-curve-sac-{f}-map.png").is_file()],
+        "",
+    ]
+
+
+SARL_BESIDE = (("tracked-mpc", "map"), ("model-oracle", "oracle"), ("copi-predictive", "map"),
+               ("compass-guard", "map"), ("navground-hrvo", "oracle"), ("straight", "map"))
+"""What SARL stands beside: the goal's tracked-mpc, the reference planner at its own
+level, copi's learnt planner, the guard, navground's best peer at oracle, and straight."""
+
+
+def sarl_lines(succ: dict, rate: dict) -> list[str]:
+    """CrowdNav's peer: SARL at oracle, trained on crowd, in every family beside what
+    plans or guards, on the same episodes."""
+    if not any(m == "sarl" for _, m, _ in succ):
+        return []
+    shipped = SEEDS.parent / "sarl" / "sarl-crowd.json"
+    info = json.loads(shipped.read_text()).get("info", {}) if shipped.is_file() else {}
+    rows = []
+    for fam in FAMILIES:
+        me = succ.get((fam, "sarl", "oracle"))
+        if me is None:
+            continue
+        cells = []
+        for m, lv in SARL_BESIDE:
+            other = succ.get((fam, m, lv))
+            cells.append("—" if other is None else
+                         f"{_pct(rate[fam, m, lv])} ({_compare(me, other, '', '')[0]})")
+        rows.append(f"| {fam} | {_pct(rate[fam, 'sarl', 'oracle'])} | " + " | ".join(cells)
+                    + " |")
+    crowd = succ.get(("crowd", "sarl", "oracle"))
+    goal = ""
+    if crowd is not None and ("crowd", "tracked-mpc", "map") in succ:
+        d, _, better = _compare(crowd, succ["crowd", "tracked-mpc", "map"], "", "")
+        met = rate["crowd", "sarl", "oracle"] >= rate["crowd", "tracked-mpc", "map"]
+        goal = (f"The goal (sarl at oracle in crowd at or above tracked-mpc): "
+                f"{'met' if met else '**missed**'}, {_pct(rate['crowd', 'sarl', 'oracle'])} "
+                f"against {_pct(rate['crowd', 'tracked-mpc', 'map'])} ({d}).")
+    cfg = info.get("config", {})
+    how = (f"{cfg.get('demo_episodes', '?')} demonstrations of {cfg.get('demonstrator', '?')}, "
+           f"then {cfg.get('rl_episodes', '?')} episodes of CrowdNav's RL; best validation "
+           f"{_pct(info.get('validation', math.nan))} (seed 1, "
+           f"{cfg.get('validation_episodes', '?')} crowd episodes), "
+           f"{info.get('seconds', 0) / 60:.0f} min on one core once the demonstrations "
+           "were recorded") if info else "—"
+    return [
+        "## CrowdNav's peer: SARL (level oracle)",
+        "",
+        "`sarl`: CrowdNav's SARL (Chen et al. 2019): a value network attending over the "
+        "discs it is told of (positions and velocities: level oracle) with the static "
+        "reading beside the robot's own state, each of 81 moves (5 speeds in 16 directions, "
+        "and standing still) scored by the reward of its step plus the discounted value of "
+        "the state one step on, every disc carried on at its velocity. Trained as CrowdNav "
+        "trains it: imitation of a demonstrator's returns (here copi's reference planner, "
+        "model-oracle, instead of ORCA), then RL with targets from a target network and "
+        "epsilon-greedy episodes, on crowd's training episodes; the network that did best "
+        f"on validation episodes kept ({how}; `python studies/sarl_train.py --out "
+        "results/sarl --install`). Learnt: the value; hand-written: the reward, the "
+        "one-step lookahead and the frame (what SARL's paper writes by hand too). Each "
+        "cell: success, then sarl's minus the method's on the same episodes.",
+        "",
+        "| family | sarl (oracle) | " + " | ".join(f"{m} ({lv})" for m, lv in SARL_BESIDE)
+        + " |",
+        "|---|---|" + "---|" * len(SARL_BESIDE),
+        *rows,
+        "",
+        goal,
+        "",
+        "The same network and recipe trained in CrowdNav's own scenario (`sarl-crowdnav`: "
+        "circle crossing, imitating CrowdNav's ORCA robot) is set beside SARL's published "
+        "number in [CrowdNav's scenarios](crowdnav.md), which checks this SARL against "
+        "CrowdNav's.",
         "",
     ]
 
@@ -510,6 +582,7 @@ def main() -> None:
         *second_peer_lines(succ, rate),
         *tuning_lines(Path(a.policies)),
         *sac_lines(succ, rate),
+        *sarl_lines(succ, rate),
         "## The first peer, in family (level map, then sensor)",
         "",
         "copi-learnt: the learnt preset's capabilities, learnt once without any task (their "

@@ -56,6 +56,23 @@ from copi.baselines._ppo import (
     to_world,
 )
 from copi.baselines._replan import Replan
+from copi.baselines._sarl import HUMAN as SARL_HUMAN
+from copi.baselines._sarl import MAX_HUMANS as SARL_MAX_HUMANS
+from copi.baselines._sarl import NETS as SARL_NETS
+from copi.baselines._sarl import SELF as SARL_SELF
+from copi.baselines._sarl import SHIPPED as SARL_SHIPPED
+from copi.baselines._sarl import WIDTHS as SARL_WIDTHS
+from copi.baselines._sarl import (
+    SARLAgent,
+    SARLFormatError,
+    SARLReward,
+    SARLWeights,
+    load_sarl,
+    packaged_sarl,
+    sarl_state,
+    sarl_values,
+    save_sarl,
+)
 from copi.baselines._simple import CompassGuard, Straight
 from copi.baselines._tangent_bug import TangentBug
 from copi.baselines._tracked import DiscTracker, TrackedMPC
@@ -78,6 +95,16 @@ __all__ = [
     "PolicyFormatError",
     "PolicyWeights",
     "Replan",
+    "SARLAgent",
+    "SARLFormatError",
+    "SARLReward",
+    "SARLWeights",
+    "SARL_HUMAN",
+    "SARL_MAX_HUMANS",
+    "SARL_NETS",
+    "SARL_SELF",
+    "SARL_SHIPPED",
+    "SARL_WIDTHS",
     "Steered",
     "Straight",
     "TangentBug",
@@ -88,9 +115,14 @@ __all__ = [
     "features",
     "features_v3",
     "load_policy",
+    "load_sarl",
     "navground_available",
     "observation_size",
     "packaged_policy",
+    "packaged_sarl",
+    "sarl_state",
+    "sarl_values",
     "save_policy",
+    "save_sarl",
     "to_world",
 ]

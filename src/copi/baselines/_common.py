@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from copi.core import Agent, Observation, Task
+from copi.core import Agent, Observation, Sensing, Task
 from copi.geometry import ring_angles
 from copi.online import Steering
 
@@ -58,7 +58,7 @@ class Steered(Agent):
     ``sensor``): subclasses turn (observation, desired direction, reach) into a velocity."""
 
     name = "steered"
-    sensing = "sensor"
+    sensing: Sensing = "sensor"
     steers_itself = True  # its own Steering: the same direction the runner would hand it
     explain = False
     """Keep each decision's candidates and their scores in :attr:`last_candidates`

@@ -6,6 +6,7 @@ accident)."""
 from __future__ import annotations
 
 from collections.abc import Callable
+from pathlib import Path
 
 from copi._files import file_sha
 from copi.baselines import (
@@ -16,11 +17,13 @@ from copi.baselines import (
     NavgroundAgent,
     PPOAgent,
     Replan,
+    SARLAgent,
     Straight,
     TangentBug,
     TrackedMPC,
     navground_available,
     packaged_policy,
+    packaged_sarl,
 )
 from copi.bounds import Clairvoyant, ModelOracle
 from copi.core import Agent
@@ -64,16 +67,25 @@ _RL_POLICIES = [
 ]  # fmt: skip
 
 
-def _weights_present(weights: str) -> Callable[[], bool]:
-    return lambda: packaged_policy(weights).is_file()
+def _weights_present(weights: str, where: Callable[[str], Path] = packaged_policy
+                     ) -> Callable[[], bool]:  # fmt: skip
+    return lambda: where(weights).is_file()
 
 
-def _weights_hash(weights: str) -> Callable[[], dict[str, str]]:
+def _weights_hash(weights: str, where: Callable[[str], Path] = packaged_policy
+                  ) -> Callable[[], dict[str, str]]:  # fmt: skip
     def sha() -> dict[str, str]:
-        path = packaged_policy(weights)
+        path = where(weights)
         return {"weights_sha": file_sha(path)} if path.is_file() else {}
 
     return sha
+
+
+_SARL = [
+    ("sarl", "sarl-crowd", "crowd episodes, imitating model-oracle"),
+    ("sarl-crowdnav", "sarl-circle-crossing", "CrowdNav's circle crossing, imitating "
+     "crowdnav-orca (CrowdNav's own recipe and scenario)"),
+]
 
 
 def _register_builtins() -> None:
@@ -158,6 +170,21 @@ def _register_builtins() -> None:
             missing=f"its trained weights {weights}.npz, which copi does not ship here: train "
             f"them with copi rl train{' --algo sac' if name.startswith('sac') else ''} -o "
             f"{weights}.npz (docs: copi against deep RL)")
+    # CrowdNav's peer (Chen et al. 2019) at its own level: a value network attending over
+    # the discs, one-step lookahead; imitation, then CrowdNav's RL (studies/sarl_train.py).
+    # Not in the default run (which predates it): --methods sarl,sarl-crowdnav
+    for name, weights, where in _SARL:
+        reg(name, SARLAgent, sensing="oracle", default=False, requires="rl-weights",
+            available=_weights_present(weights, packaged_sarl),
+            inputs=_weights_hash(weights, packaged_sarl),
+            params={"weights": weights},
+            summary="CrowdNav's SARL: a value network attending over the discs (positions and "
+            "velocities known) with the static reading, each of 81 moves scored by its "
+            f"step's reward and the value one step on; trained on {where}, then CrowdNav's "
+            "RL (learnt; the reward and the lookahead hand-written)",
+            missing=f"its trained weights {weights}.npz, which copi does not ship here: "
+            "train them with python studies/sarl_train.py --install (docs: copi against "
+            "deep RL)")
     # Bounds, not methods: what is possible (marked so in every table and figure).
     reg("clairvoyant", Clairvoyant, sensing="future", default=True, bound=True,
         summary="a bound: space-time A* on the obstacles' recorded future (they ignore the "

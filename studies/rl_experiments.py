@@ -320,7 +320,11 @@ def sarl_lines(succ: dict, rate: dict) -> list[str]:
         "The same network and recipe trained in CrowdNav's own scenario (`sarl-crowdnav`: "
         "circle crossing, imitating CrowdNav's ORCA robot) is set beside SARL's published "
         "number in [CrowdNav's scenarios](crowdnav.md), which checks this SARL against "
-        "CrowdNav's.",
+        "CrowdNav's. Their validation curves (success after imitation, then every 100 "
+        "episodes of RL; the best kept):",
+        "",
+        *[f"![{n}](rl-curve-{n}.png)" for n in ("sarl-crowd", "sarl-circle-crossing")
+          if (DOCS / f"rl-curve-{n}.png").is_file()],
         "",
     ]
 

@@ -10,7 +10,6 @@ copies the weights where copi ships them (method ``sarl``).
 from __future__ import annotations
 
 import argparse
-import json
 import shutil
 import sys
 import time
@@ -19,8 +18,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
 from copi.baselines import SARL_SHIPPED as SHIPPED  # noqa: E402
-from copi.baselines import save_sarl  # noqa: E402
-from copi.rl._sarl import SARLConfig, train_sarl  # noqa: E402
+from copi.rl import SARLConfig, train_sarl, write_sarl  # noqa: E402
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -47,9 +45,7 @@ def main(argv: list[str] | None = None) -> int:
     demos = out / f"demos-{args.family}-{args.demonstrator}-{args.demo_episodes}.npz"
     weights, curve = train_sarl(config, log=lambda s: print(s, flush=True), demos=demos)
     weights.info["command"] = "python studies/sarl_train.py " + " ".join(sys.argv[1:])
-    path = save_sarl(weights, out / f"{name}.npz")
-    (out / f"{name}.json").write_text(json.dumps({"curve": curve, "info": weights.info},
-                                                 indent=1, default=str))  # fmt: skip
+    path = write_sarl(weights, curve, out / f"{name}.npz")
     print(f"{path} ({time.perf_counter() - t0:.0f} s; best validation "
           f"{weights.info['validation']:.1%})")
     if args.install:

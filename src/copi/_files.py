@@ -44,7 +44,7 @@ __all__ = [
 
 # What an output of each kind may replace (by the existing file's content, see file_kind)
 _NPZ_FORMATS = {"copi-capabilities": "capabilities file", "copi-policy": "policy file",
-                "copi-causal-map": "causal map"}
+                "copi-causal-map": "causal map", "copi-sarl": "SARL network"}
 """What a copi ``.npz`` holds, by the format its metadata names."""
 
 _KINDS = {
@@ -52,6 +52,7 @@ _KINDS = {
     "npz": {"npz archive", *_NPZ_FORMATS.values()},
     "capabilities": {"npz archive", "capabilities file"},
     "policy": {"npz archive", "policy file"},
+    "SARL network": {"npz archive", "SARL network"},
     "causal map": {"npz archive", "causal map"},
     "png": {"PNG image"},
     "gif": {"GIF image"},

@@ -228,3 +228,42 @@ def test_every_shipped_sarl_network_loads_and_says_how_it_was_trained() -> None:
         info = load_sarl(path).info
         assert info.get("command", "").startswith("python studies/sarl_train.py "), path.name
         assert 0.0 < info["validation"] <= 1.0 and info["config"]["family"] in path.stem
+
+
+@pytest.mark.parametrize(("args", "words"), [
+    (["--family", "castle"], "family must be one of"),
+    (["--demonstrator", "dwa"], "must run at level oracle"),
+    (["--demonstrator", "nosuch"], "nosuch"),
+    (["--epsilon", "0.5,x"], "--epsilon must be three"),
+    (["--epsilon", "2,0.1,10"], "epsilon must be"),
+    (["--demo-episodes", "0"], "--demo-episodes"),
+])  # fmt: skip
+def test_bad_sarl_training_options_are_one_line_and_write_nothing(
+    args: list[str], words: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from tests.cli.test_faults import _one_line_error, run
+
+    line = _one_line_error(*run(["rl", "sarl", "-o", str(tmp_path / "s.npz"), *args],
+                                capsys)[::2])  # fmt: skip
+    assert words in line
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_copi_rl_sarl_writes_a_network_copi_runs_and_its_curve(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    pytest.importorskip("torch")
+    from tests.cli.test_faults import run
+
+    out = tmp_path / "s.npz"
+    code, stdout, err = run(["rl", "sarl", "-o", str(out), "--demo-episodes", "2",
+                             "--il-epochs", "2", "--rl-episodes", "1",
+                             "--validation-episodes", "2"], capsys)  # fmt: skip
+    assert code == 0, err
+    w = load_sarl(out)
+    assert w.info["command"].startswith("copi rl sarl -o ") and "--rl-episodes 1" in w.info[
+        "command"]  # fmt: skip
+    curve = json.loads(out.with_suffix(".json").read_text())["curve"]
+    assert [c["episodes"] for c in curve] == [0, 1]
+    assert out.with_suffix(".png").read_bytes()[:4] == b"\x89PNG"
+    check_agent(lambda: SARLAgent(str(out)), levels=["oracle"], episodes=1, max_steps=20)

@@ -12,7 +12,8 @@ import typer
 from copi._files import check_outputs, check_writable
 from copi.cli._common import app, out, progress, seed_option
 
-rl_app = typer.Typer(help="Deep RL as copi's learning peer: train PPO or SAC policies.",
+rl_app = typer.Typer(help="Deep RL as copi's learning peer: train PPO or SAC policies, or "
+                     "CrowdNav's SARL.",
                      no_args_is_help=True)  # fmt: skip
 app.add_typer(rl_app, name="rl")
 
@@ -148,3 +149,65 @@ def train_command(
         f"{100 * summary['curve'][-1]['success']:.1f} % at the end; kept: the policy of "
         f"{summary['kept_steps']:,} steps ({100 * summary['kept_success']:.1f} %)"
     )
+
+
+@rl_app.command("sarl")
+def sarl_command(
+    output: Annotated[Path, typer.Option("-o", "--output", help="Network file to write (.npz).")],
+    family: Annotated[str, typer.Option("--family", help="Family of the episodes.")] = "crowd",
+    demonstrator: Annotated[
+        str, typer.Option("--demonstrator", help="Registered method imitated first (level "
+                          "oracle; CrowdNav's: crowdnav-orca).")
+    ] = "model-oracle",
+    demo_episodes: Annotated[
+        int, typer.Option("--demo-episodes", min=1, max=100_000, help="Demonstrations.")
+    ] = 300,
+    il_epochs: Annotated[
+        int, typer.Option("--il-epochs", min=0, max=10_000, help="Passes over them.")
+    ] = 50,
+    rl_episodes: Annotated[
+        int, typer.Option("--rl-episodes", min=0, max=1_000_000, help="Episodes of RL.")
+    ] = 1000,
+    epsilon: Annotated[
+        str, typer.Option("--epsilon", help="Exploration: first, last, over how many episodes.")
+    ] = "0.5,0.1,400",
+    validation_episodes: Annotated[
+        int, typer.Option("--validation-episodes", min=1, max=10_000,
+                          help="Validation episodes (seed 1) every 100 episodes of RL.")
+    ] = 60,
+    seed: Annotated[int, seed_option("the network and the exploration")] = 0,
+) -> None:
+    """Train SARL as CrowdNav trains it (imitation of the demonstrator's returns, then RL
+    with a target network) on the family's training episodes at level oracle. Writes the
+    network that did best on validation episodes (copi.baselines.SARLAgent(weights=FILE)
+    runs it, without torch) and its learning curve (.json, .png). Needs the extra rl."""
+    from copi.errors import InvalidArgumentError
+    from copi.rl import RLMissingError, SARLConfig, rl_available, train_sarl, write_sarl
+
+    check_outputs({"the network": (output, "SARL network"),
+                   "the learning curve": (output.with_suffix(".json"), "json"),
+                   "the learning curve's figure": (output.with_suffix(".png"), "png")})
+    try:
+        e0, e1, span = (x.strip() for x in epsilon.split(","))
+        eps = (float(e0), float(e1), int(span))
+    except ValueError:
+        raise InvalidArgumentError("--epsilon must be three comma-separated numbers (first, "
+                                   f"last, episodes); got {epsilon!r}") from None
+    config = SARLConfig(family=family, demonstrator=demonstrator, demo_episodes=demo_episodes,
+                        il_epochs=il_epochs, rl_episodes=rl_episodes, epsilon=eps,
+                        validation_episodes=validation_episodes,
+                        validate_every=100 if rl_episodes >= 100 else max(1, rl_episodes),
+                        seed=seed)  # fmt: skip
+    if not rl_available():
+        raise RLMissingError("training SARL needs the optional extra rl (torch): pip install "
+                             "'copi[rl]'")  # fmt: skip
+    check_writable(output.parent, "the network")
+    with progress() as bar:
+        tid = bar.add_task("sarl: episodes", total=demo_episodes + rl_episodes)
+        weights, curve = train_sarl(config, log=lambda line: None,
+                                    progress=lambda done, total: bar.update(tid, completed=done))
+    weights.info["command"] = "copi " + " ".join(shlex.quote(a) for a in sys.argv[1:])
+    write_sarl(weights, curve, output)
+    out.print(f"{output}: SARL, {demo_episodes:,} demonstrations of {demonstrator} and "
+              f"{rl_episodes:,} episodes of RL in {weights.info['seconds']:,} s; kept: "
+              f"validation success {100 * weights.info['validation']:.1f} %")

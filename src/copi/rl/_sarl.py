@@ -39,7 +39,7 @@ from copi.online import Steering
 from copi.runs import Episode
 
 __all__ = ["SARLConfig", "SARLNet", "Transitions", "export", "record_episodes", "returns",
-           "rewards", "train_sarl"]
+           "rewards", "train_sarl", "write_sarl"]
 
 VALIDATION_SEED = 1
 
@@ -74,8 +74,13 @@ class SARLConfig:
         for k in ("demo_episodes", "il_epochs", "rl_episodes", "batch", "batches", "memory",
                   "target_every", "validate_every", "validation_episodes"):  # fmt: skip
             v = getattr(self, k)
-            if not (isinstance(v, int) and not isinstance(v, bool) and v >= 0):
-                raise InvalidArgumentError(f"{k} must be a whole number >= 0; got {v!r}")
+            least = 1 if k in ("demo_episodes", "batch", "memory", "target_every") else 0
+            if not (isinstance(v, int) and not isinstance(v, bool) and v >= least):
+                raise InvalidArgumentError(f"{k} must be a whole number >= {least}; got {v!r}")
+        e0, e1, span = self.epsilon
+        if not (0 <= e1 <= 1 and 0 <= e0 <= 1 and isinstance(span, int) and span >= 0):
+            raise InvalidArgumentError("epsilon must be (first, last, episodes): two numbers "
+                                       f"in [0, 1] and a whole number >= 0; got {self.epsilon}")
         for k in ("il_lr", "rl_lr"):
             v = getattr(self, k)
             if not (isinstance(v, float | int) and 0 < v < 1):
@@ -193,6 +198,7 @@ def record_episodes(
     family: str,
     seed: int,
     out: Transitions | None = None,
+    progress: Callable[[], None] | None = None,
 ) -> tuple[Transitions, list[str]]:
     """Run ``make()`` on the family's episodes of ``seed`` at level ``oracle`` (the route
     as the global direction), recording SARL's states and what each step did; returns
@@ -203,6 +209,8 @@ def record_episodes(
         ep = Episode.draw(family, k, seed)
         res = ep.run(_Recorder(make(), out), sensing="oracle")
         outcomes.append(res.outcome)
+        if progress is not None:
+            progress()
     return out, outcomes
 
 
@@ -324,7 +332,8 @@ def validate(weights: SARLWeights, config: SARLConfig) -> float:
 
 
 def _demonstrations(config: SARLConfig, cache: str | os.PathLike[str] | None,
-                    log: Callable[[str], None]) -> dict[str, NDArray[Any]]:  # fmt: skip
+                    log: Callable[[str], None],
+                    progress: Callable[[], None] | None = None) -> dict[str, NDArray[Any]]:
     """The demonstrations (:meth:`Transitions.arrays`), recorded (and kept in ``cache``, a
     plain ``.npz`` read without pickle) or read back from a cache of the same settings."""
     from copi.methods import make_agent
@@ -339,7 +348,7 @@ def _demonstrations(config: SARLConfig, cache: str | os.PathLike[str] | None,
                 return {k: z[k] for k in z.files if k != "key"}
     demo, outcomes = record_episodes(lambda: make_agent(config.demonstrator),
                                      range(config.demo_episodes), config.family,
-                                     TRAINING_SEED)  # fmt: skip
+                                     TRAINING_SEED, progress=progress)  # fmt: skip
     log(f"{config.demonstrator}: {outcomes.count('success')} successes in "
         f"{config.demo_episodes} demonstrations")
     a = demo.arrays()
@@ -352,10 +361,28 @@ def train_sarl(
     config: SARLConfig,
     log: Callable[[str], None] = print,
     demos: str | os.PathLike[str] | None = None,
+    progress: Callable[[int, int], None] | None = None,
 ) -> tuple[SARLWeights, list[dict[str, float]]]:
     """Imitation, then RL (see the module); returns the best validated weights and the
     learning curve (episodes, validation success, loss). ``demos``: a file keeping the
-    demonstrations between runs of the same settings."""
+    demonstrations between runs of the same settings; ``progress(done, total)`` counts
+    the episodes run (demonstrations, then RL)."""
+    from copi.methods import method_spec
+    from copi.world import check_family
+
+    check_family(config.family)
+    spec = method_spec(config.demonstrator)
+    if "oracle" not in spec.levels:
+        raise InvalidArgumentError(f"the demonstrator must run at level oracle; "
+                                   f"{config.demonstrator} runs at {', '.join(spec.levels)}")
+    total = config.demo_episodes + config.rl_episodes
+    done = [0]
+
+    def step() -> None:
+        done[0] += 1
+        if progress is not None:
+            progress(done[0], total)
+
     torch = _torch()
     torch.set_num_threads(1)  # batches of 100 small states: more threads only contend
     torch.manual_seed(config.seed)
@@ -367,7 +394,10 @@ def train_sarl(
     curve: list[dict[str, float]] = []
     t0 = time.perf_counter()
     # 1. imitation: the demonstrator's returns
-    demo = _demonstrations(config, demos, log)
+    demo = _demonstrations(config, demos, log, step)
+    if done[0] < config.demo_episodes:  # read from the cache
+        done[0] = config.demo_episodes - 1
+        step()
     data = (demo["me"], demo["humans"], demo["static"])
     g = returns(demo, config.reward)
     log(f"demonstrations: {len(g):,} states from {config.demo_episodes} episodes of "
@@ -401,7 +431,8 @@ def train_sarl(
             return SARLAgent(w, epsilon=e, rng=r)
 
         k = train_seed_base + episode
-        run, _ = record_episodes(explorer, range(k, k + 1), config.family, TRAINING_SEED)
+        run, _ = record_episodes(explorer, range(k, k + 1), config.family, TRAINING_SEED,
+                                 progress=step)  # fmt: skip
         a = run.arrays()
         me, humans, static, end = a["me"], a["humans"], a["static"], a["end"]
         reward = rewards(a, config.reward)
@@ -430,3 +461,20 @@ def train_sarl(
     info = {**info, "validation": best_score, "curve": curve,
             "seconds": round(time.perf_counter() - t0)}  # fmt: skip
     return SARLWeights(best.nets, best.n_rays, best.max_range, best.reward, info), curve
+
+
+def write_sarl(weights: SARLWeights, curve: list[dict[str, float]],
+               output: str | os.PathLike[str]) -> Path:  # fmt: skip
+    """Write the network (``output``, ``.npz``), its learning curve and what trained it
+    (``.json``) and the curve's figure (``.png``) beside it."""
+    from copi.baselines import save_sarl
+    from copi.rl._train import _curve_figure
+
+    path = save_sarl(weights, output)
+    path.with_suffix(".json").write_text(json.dumps({"curve": curve, "info": weights.info},
+                                                    indent=1, default=str))  # fmt: skip
+    family = weights.info.get("config", {}).get("family", "?")
+    _curve_figure([{"steps": c["episodes"], "success": c["validation"]} for c in curve],
+                  path.with_suffix(".png"), title=f"SARL on {family}",
+                  xlabel="episodes of RL (0: after imitation)")  # fmt: skip
+    return path

@@ -335,11 +335,12 @@ def _what_is_saved(config: TrainConfig, ckpt: Path | None, checkpointed: int,
             "the checkpoints once there are some")  # fmt: skip
 
 
-def _curve_figure(curve: list[dict[str, float]], path: Path, *, title: str) -> None:
+def _curve_figure(curve: list[dict[str, float]], path: Path, *, title: str,
+                  xlabel: str = "environment steps") -> None:  # fmt: skip
     fig = new_figure(5.0, 3.4)
     ax = fig.add_subplot()
     ax.plot([c["steps"] for c in curve], [100 * c["success"] for c in curve], marker="o", ms=3)
-    ax.set_xlabel("environment steps")
+    ax.set_xlabel(xlabel)
     ax.set_ylabel("validation success (%)")
     ax.set_title(title, fontsize=9)
     ax.grid(alpha=0.3)

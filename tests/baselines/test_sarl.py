@@ -182,6 +182,8 @@ def test_the_weights_round_trip_and_bad_files_are_refused(tmp_path: Path) -> Non
                         "format"),
         "missing.npz": ({"metadata.npy": npy(np.array(json.dumps(
             {**meta, "layers": {**meta["layers"], "mlp3": 4}})))}, "missing"),
+        "huge.npz": ({"metadata.npy": npy(np.array(json.dumps(
+            {**meta, "reward": {**meta["reward"], "progress": 10**400}})))}, "reward"),
     }  # fmt: skip
     for name, (change, words) in cases.items():
         with pytest.raises(SARLFormatError, match=words) as exc:
@@ -257,13 +259,13 @@ def test_copi_rl_sarl_writes_a_network_copi_runs_and_its_curve(
 
     out = tmp_path / "s.npz"
     code, stdout, err = run(["rl", "sarl", "-o", str(out), "--demo-episodes", "2",
-                             "--il-epochs", "2", "--rl-episodes", "1",
+                             "--il-epochs", "0", "--rl-episodes", "1",
                              "--validation-episodes", "2"], capsys)  # fmt: skip
     assert code == 0, err
     w = load_sarl(out)
     assert w.info["command"].startswith("copi rl sarl -o ") and "--rl-episodes 1" in w.info[
         "command"]  # fmt: skip
     curve = json.loads(out.with_suffix(".json").read_text())["curve"]
-    assert [c["episodes"] for c in curve] == [0, 1]
+    assert [c["episodes"] for c in curve] == [0, 1]  # the last episode validated too
     assert out.with_suffix(".png").read_bytes()[:4] == b"\x89PNG"
     check_agent(lambda: SARLAgent(str(out)), levels=["oracle"], episodes=1, max_steps=20)

@@ -107,9 +107,10 @@ class SARLReward:
 
     def __post_init__(self) -> None:
         for k, v in vars(self).items():
-            if not (isinstance(v, int | float) and math.isfinite(v) and 0 <= v <= 1000):
+            if not (isinstance(v, int | float) and not isinstance(v, bool)
+                    and 0 <= v <= 1000 and math.isfinite(v)):  # fmt: skip
                 raise InvalidArgumentError(f"SARL reward {k} must be a number in [0, 1000]; "
-                                           f"got {v!r}")  # fmt: skip
+                                           f"got {v!r}"[:200])  # fmt: skip
         if not 0 < self.gamma < 1 or self.near <= 0:
             raise InvalidArgumentError("SARL reward gamma must lie in (0, 1) and near above 0; "
                                        f"got {self.gamma!r}, {self.near!r}")  # fmt: skip

@@ -196,7 +196,6 @@ def sarl_command(
     config = SARLConfig(family=family, demonstrator=demonstrator, demo_episodes=demo_episodes,
                         il_epochs=il_epochs, rl_episodes=rl_episodes, epsilon=eps,
                         validation_episodes=validation_episodes,
-                        validate_every=100 if rl_episodes >= 100 else max(1, rl_episodes),
                         seed=seed)  # fmt: skip
     if not rl_available():
         raise RLMissingError("training SARL needs the optional extra rl (torch): pip install "
@@ -206,7 +205,11 @@ def sarl_command(
         tid = bar.add_task("sarl: episodes", total=demo_episodes + rl_episodes)
         weights, curve = train_sarl(config, log=lambda line: None,
                                     progress=lambda done, total: bar.update(tid, completed=done))
-    weights.info["command"] = "copi " + " ".join(shlex.quote(a) for a in sys.argv[1:])
+    weights.info["command"] = " ".join(shlex.quote(str(a)) for a in (
+        "copi", "rl", "sarl", "-o", output, "--family", family, "--demonstrator", demonstrator,
+        "--demo-episodes", demo_episodes, "--il-epochs", il_epochs, "--rl-episodes",
+        rl_episodes, "--epsilon", epsilon, "--validation-episodes", validation_episodes,
+        "--seed", seed))  # fmt: skip
     write_sarl(weights, curve, output)
     out.print(f"{output}: SARL, {demo_episodes:,} demonstrations of {demonstrator} and "
               f"{rl_episodes:,} episodes of RL in {weights.info['seconds']:,} s; kept: "

@@ -82,9 +82,12 @@ def _weights_hash(weights: str, where: Callable[[str], Path] = packaged_policy
 
 
 _SARL = [
-    ("sarl", "sarl-crowd", "crowd episodes, imitating model-oracle"),
+    ("sarl", "sarl-crowd", "crowd episodes, imitating model-oracle",
+     "--demo-episodes 1000 --il-epochs 26 --rl-episodes 300 --epsilon 0.3,0.05,300"),
     ("sarl-crowdnav", "sarl-circle-crossing", "CrowdNav's circle crossing, imitating "
-     "crowdnav-orca (CrowdNav's own recipe and scenario)"),
+     "crowdnav-orca (CrowdNav's scenario and demonstrator)",
+     "--family circle-crossing --demonstrator crowdnav-orca --demo-episodes 1000 "
+     "--il-epochs 26 --rl-episodes 600 --epsilon 0.3,0.05,300"),
 ]
 
 
@@ -173,7 +176,7 @@ def _register_builtins() -> None:
     # CrowdNav's peer (Chen et al. 2019) at its own level: a value network attending over
     # the discs, one-step lookahead; imitation, then CrowdNav's RL (studies/sarl_train.py).
     # Not in the default run (which predates it): --methods sarl,sarl-crowdnav
-    for name, weights, where in _SARL:
+    for name, weights, where, how in _SARL:
         reg(name, SARLAgent, sensing="oracle", default=False, requires="rl-weights",
             available=_weights_present(weights, packaged_sarl),
             inputs=_weights_hash(weights, packaged_sarl),
@@ -183,8 +186,8 @@ def _register_builtins() -> None:
             f"step's reward and the value one step on; trained on {where}, then CrowdNav's "
             "RL (learnt; the reward and the lookahead hand-written)",
             missing=f"its trained weights {weights}.npz, which copi does not ship here: "
-            "train them with python studies/sarl_train.py --install (docs: copi against "
-            "deep RL)")
+            f"train them with python studies/sarl_train.py {how} --install (docs: copi "
+            "against deep RL)")
     # Bounds, not methods: what is possible (marked so in every table and figure).
     reg("clairvoyant", Clairvoyant, sensing="future", default=True, bound=True,
         summary="a bound: space-time A* on the obstacles' recorded future (they ignore the "

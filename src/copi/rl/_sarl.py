@@ -18,6 +18,7 @@ import json
 import math
 import os
 import time
+import zipfile
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -42,6 +43,9 @@ __all__ = ["SARLConfig", "SARLNet", "Transitions", "export", "record_episodes", 
            "rewards", "train_sarl", "write_sarl"]
 
 VALIDATION_SEED = 1
+FEATURES = 1
+"""The version of SARL's state features (copi.baselines.sarl_state): a cache of
+demonstrations recorded under another is recorded anew."""
 
 
 @dataclass(frozen=True)
@@ -185,6 +189,9 @@ class _Recorder(Agent):
         return a
 
     def finish(self, outcome: str) -> None:
+        """The episode's last state is terminal whatever its outcome (a timeout's too, as
+        CrowdNav's); its step earns the goal's bonus or the contact's penalty, and a
+        timeout's last step nothing (no later observation shows what it did)."""
         self.inner.finish(outcome)
         if not self.out.end:
             return
@@ -336,16 +343,21 @@ def _demonstrations(config: SARLConfig, cache: str | os.PathLike[str] | None,
                     progress: Callable[[], None] | None = None) -> dict[str, NDArray[Any]]:
     """The demonstrations (:meth:`Transitions.arrays`), recorded (and kept in ``cache``, a
     plain ``.npz`` read without pickle) or read back from a cache of the same settings."""
+    from copi import __version__
     from copi.methods import make_agent
 
     key = json.dumps({"demonstrator": config.demonstrator, "family": config.family,
-                      "episodes": config.demo_episodes, "seed": TRAINING_SEED},
+                      "episodes": config.demo_episodes, "seed": TRAINING_SEED,
+                      "copi": __version__, "state": [SELF, HUMAN, MAX_HUMANS, FEATURES]},
                      sort_keys=True)  # fmt: skip
     if cache is not None and Path(cache).is_file():
-        with np.load(cache, allow_pickle=False) as z:
-            if str(z["key"]) == key:
-                log(f"demonstrations read from {cache}")
-                return {k: z[k] for k in z.files if k != "key"}
+        try:
+            with np.load(cache, allow_pickle=False) as z:
+                if str(z["key"]) == key:
+                    log(f"demonstrations read from {cache}")
+                    return {k: z[k] for k in z.files if k != "key"}
+        except (OSError, ValueError, KeyError, zipfile.BadZipFile):
+            pass  # not a cache of these demonstrations: recorded anew
     demo, outcomes = record_episodes(lambda: make_agent(config.demonstrator),
                                      range(config.demo_episodes), config.family,
                                      TRAINING_SEED, progress=progress)  # fmt: skip
@@ -353,7 +365,9 @@ def _demonstrations(config: SARLConfig, cache: str | os.PathLike[str] | None,
         f"{config.demo_episodes} demonstrations")
     a = demo.arrays()
     if cache is not None:
-        np.savez(cache, key=np.array(key), **a)  # type: ignore[arg-type]
+        tmp = Path(f"{cache}.part.npz")
+        np.savez(tmp, key=np.array(key), **a)  # type: ignore[arg-type]
+        tmp.replace(cache)
     return a
 
 
@@ -404,6 +418,7 @@ def train_sarl(
         f"{config.demonstrator}, {time.perf_counter() - t0:.0f} s")
     opt = torch.optim.Adam(net.parameters(), lr=config.il_lr)
     per_epoch = max(1, len(g) // config.batch)
+    loss = math.nan
     for epoch in range(config.il_epochs):
         loss = _fit(net, opt, data, g, rng, per_epoch, config.batch)
         if epoch % 10 == 9 or epoch == config.il_epochs - 1:
@@ -441,16 +456,16 @@ def train_sarl(
                          torch.as_tensor(humans, dtype=torch.float32),
                          torch.as_tensor(static, dtype=torch.float32)).numpy()  # fmt: skip
         tgt = reward.copy()
+        # the episode's last state is terminal, a timeout too (as CrowdNav's)
         tgt[:-1] += gamma * nxt[1:] * (~end[:-1])
-        if not end[-1]:
-            tgt[-1] += gamma * nxt[-1]  # a timeout: the state's own value stands in
         memory.push((me, humans, static), tgt)
         if memory.size >= config.batch:
             loss = _fit(net, opt, memory.data(), memory.target[: memory.size], rng,
                         config.batches, config.batch)  # fmt: skip
         if (episode + 1) % config.target_every == 0:
             target.load_state_dict(net.state_dict())
-        if config.validate_every and (episode + 1) % config.validate_every == 0:
+        last = episode + 1 == config.rl_episodes
+        if config.validate_every and ((episode + 1) % config.validate_every == 0 or last):
             w = export(net, config.reward, info=info)
             score = validate(w, config)
             curve.append({"episodes": episode + 1, "validation": score, "loss": loss})

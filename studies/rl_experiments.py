@@ -70,6 +70,8 @@ METHODS = ["copi-learnt", "compass-guard", "dwa", "straight", "ppo", "ppo-guard"
            *[f"ppo-{f}" for f in FAMILIES], "copi-predictive@map",
            *[f"ppo-{f}-map" for f in FAMILIES], *[f"ppo-guard-{f}-map" for f in FAMILIES],
            *[f"sac-{f}-map" for f in SAC_FAMILIES],
+           *[f"ppo-{f}-sensor@sensor" for f in FAMILIES if f"ppo-{f}-sensor" in method_names()
+             and method_spec(f"ppo-{f}-sensor").available()],
            *(["sarl@oracle"] if method_spec("sarl").available() else [])]
 """The first peer (``ppo``, ``ppo-F``: the ranges and their change, sensor and map mixed),
 the second (``ppo-F-map``: map's reading, one policy per level) and the second algorithm
@@ -250,6 +252,49 @@ def sac_lines(succ: dict, rate: dict) -> list[str]:
         "",
         *[f"![sac-{f}-map](rl-curve-sac-{f}-map.png)" for f in SAC_FAMILIES
           if (DOCS / f"rl-curve-sac-{f}-map.png").is_file()],
+        "",
+    ]
+
+
+def sensor_lines(succ: dict, rate: dict) -> list[str]:
+    """The second peer at level sensor (no static reading, the goal's direction), where it
+    was trained, beside the methods at that level, on the same episodes."""
+    rows = []
+    for fam in FAMILIES:
+        me = succ.get((fam, f"ppo-{fam}-sensor", "sensor"))
+        if me is None:
+            continue
+        arms = {m: succ.get((fam, m, "sensor")) for m in ("straight", "compass-guard",
+                                                           "copi-learnt")}  # fmt: skip
+        if any(v is None for v in arms.values()):
+            continue
+        at = rate[fam, f"ppo-{fam}-sensor", "sensor"]
+        rows.append(
+            f"| {fam} | {_pct(rate[fam, 'straight', 'sensor'])} | "
+            f"{_pct(rate[fam, 'compass-guard', 'sensor'])} | "
+            f"{_pct(rate[fam, 'copi-learnt', 'sensor'])} | "
+            f"{_pct(rate.get((fam, f'ppo-{fam}-map', 'map'), math.nan))} | {_pct(at)} | "
+            f"{_compare(me, arms['straight'], '', '')[0]} | "
+            f"{_compare(me, arms['compass-guard'], '', '')[0]} | "
+            f"{_compare(arms['copi-learnt'], me, '', '')[0]} |"
+        )
+    if not rows:
+        return []
+    return [
+        "## One policy per level: the second peer at sensor",
+        "",
+        "`ppo-F-sensor`: the second peer's training (`copi-local-v3`, copi rl train's "
+        "defaults) at level sensor only: no static reading, so the hits the map does not "
+        "explain are not told apart, and the goal's direction instead of the route's "
+        "(`python studies/rl_train_all.py --only F-sensor --seeds 0`). Beside the methods "
+        "at the same level on the same episodes, and its own family's map-level policy; "
+        "trained where the table shows only.",
+        "",
+        "| family | straight | compass-guard | copi-learnt | ppo-F-map (map) | ppo-F-sensor | "
+        "Δ ppo-F-sensor − straight | Δ ppo-F-sensor − compass-guard | Δ copi-learnt − "
+        "ppo-F-sensor |",
+        "|---|---|---|---|---|---|---|---|---|",
+        *rows,
         "",
     ]
 
@@ -601,6 +646,7 @@ def main() -> None:
         *second_peer_lines(succ, rate),
         *tuning_lines(Path(a.policies)),
         *sac_lines(succ, rate),
+        *sensor_lines(succ, rate),
         *sarl_lines(succ, rate),
         "## The first peer, in family (level map, then sensor)",
         "",

@@ -54,7 +54,10 @@ FIRST = ["--observation", "copi-local-v2", "--levels", "sensor,map", "--frames",
          "--batch-size", "256", "--raw-reward"]
 """The first peer's settings apart from :data:`TUNING`'s (its defaults when it was
 trained)."""
-SECOND = {f"{f}-map": ["--families", f, "--levels", "map"] for f in FAMILIES}
+SECOND = {f"{f}-{lv}": ["--families", f, "--levels", lv] for lv in ("map", "sensor")
+          for f in FAMILIES}
+"""The second peer's configurations: one policy per family and level (``F-map``, and
+``F-sensor``: the level that gives no static reading)."""
 TUNING_SECOND = {
     "default": [],
     "raw-reward": ["--raw-reward"],

@@ -269,3 +269,12 @@ def test_copi_rl_sarl_writes_a_network_copi_runs_and_its_curve(
     assert [c["episodes"] for c in curve] == [0, 1]  # the last episode validated too
     assert out.with_suffix(".png").read_bytes()[:4] == b"\x89PNG"
     check_agent(lambda: SARLAgent(str(out)), levels=["oracle"], episodes=1, max_steps=20)
+
+
+def test_the_state_keeps_the_direction_s_unit_vector_whatever_its_length() -> None:
+    obs, d = scene(np.random.default_rng(9))
+    _, me, h, st = sarl_state(obs, d, 5.0, np.zeros(2), 0.3, 10.0)
+    _, me7, h7, st7 = sarl_state(obs, 7.3 * d, 5.0, np.zeros(2), 0.3, 10.0)
+    assert np.hypot(*me[1:3]) == pytest.approx(1.0)
+    np.testing.assert_allclose(me7, me, atol=1e-12)  # a rounding of the norm apart
+    np.testing.assert_array_equal(h7, h)

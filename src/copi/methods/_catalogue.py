@@ -61,9 +61,9 @@ _RL_POLICIES = [
     *[(f"ppo-guard-{f}-map", f"ppo-{f}-map", 1.05, f"ppo-{f}-map shielded by compass-guard's "
        "hand-written guard") for f in ("star", "polygon", "indoor", "maps", "crowd")],
     # the second peer at level sensor, where it was trained (docs/rl.md)
-    ("ppo-star-sensor", "ppo-star-sensor", 0.0, "PPO trained on the star family at sensor, "
-     "seeing what that level gives (the reading, three stacked, its own velocity) under "
-     "the goal's direction; nothing hand-written"),
+    *[(f"ppo-{f}-sensor", f"ppo-{f}-sensor", 0.0, f"PPO trained on the {f} family at "
+       "sensor, seeing what that level gives (the reading, three stacked, its own velocity) "
+       "under the goal's direction; nothing hand-written") for f in ("star", "crowd")],
     # the second algorithm, where it was trained (docs/rl.md)
     *[(f"sac-{f}-map", f"sac-{f}-map", 0.0, f"SAC trained on the {f} family at map, seeing "
        f"what ppo-{f}-map sees (copi-local-v3); nothing hand-written")

@@ -37,6 +37,7 @@ hand-written but the reward, the lookahead and the feature frame; the weights sh
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 import os
@@ -403,18 +404,18 @@ class SARLAgent(Steered):
         return move
 
 
-_BLAS: list[Any] = []
+@functools.cache
+def _blas() -> Any:
+    from threadpoolctl import ThreadpoolController
+
+    return ThreadpoolController()
 
 
 def _one_blas_thread() -> Any:
     """BLAS on one thread for a decision's small products (a few hundred rows): spread
     over every core they ran 3 to 20 times slower on a busy 2-core machine, and a
     benchmark's workers would each take every core."""
-    if not _BLAS:
-        from threadpoolctl import ThreadpoolController
-
-        _BLAS.append(ThreadpoolController())
-    return _BLAS[0].limit(limits=1, user_api="blas")
+    return _blas().limit(limits=1, user_api="blas")
 
 
 def _world(a: NDArray[np.float64], k: int, n: int) -> NDArray[np.float64]:

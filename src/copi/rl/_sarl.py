@@ -37,12 +37,12 @@ from copi.core import Agent, Observation, Task
 from copi.envs.local_policy import TRAINING_SEED
 from copi.errors import InvalidArgumentError
 from copi.online import Steering
+from copi.rl._train import VALIDATION_SEED
 from copi.runs import Episode
 
 __all__ = ["SARLConfig", "SARLNet", "Transitions", "export", "record_episodes", "returns",
            "rewards", "train_sarl", "write_sarl"]
 
-VALIDATION_SEED = 1
 FEATURES = 1
 """The version of SARL's state features (copi.baselines.sarl_state): a cache of
 demonstrations recorded under another is recorded anew."""
@@ -299,12 +299,14 @@ class _Memory:
 
     def push(self, data: tuple[NDArray[np.float64], ...], target: NDArray[np.float64]) -> None:
         cap = len(self.target)
-        for i in range(len(target)):  # rows in order, the oldest overwritten
-            for mem, a in zip(self.arrays, data, strict=True):
-                mem[self.at] = a[i]
-            self.target[self.at] = target[i]
-            self.at = (self.at + 1) % cap
-            self.size = min(cap, self.size + 1)
+        n = len(target)
+        keep = slice(max(0, n - cap), n)  # rows in order, the oldest overwritten
+        rows = (self.at + np.arange(n)[keep]) % cap
+        for mem, a in zip(self.arrays, data, strict=True):
+            mem[rows] = a[keep]
+        self.target[rows] = target[keep]
+        self.at = (self.at + n) % cap
+        self.size = min(cap, self.size + n)
 
     def data(self) -> tuple[NDArray[np.float64], ...]:
         return tuple(a[: self.size] for a in self.arrays)

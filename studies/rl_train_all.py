@@ -4,6 +4,7 @@
     python studies/rl_train_all.py --peer first --steps 2000000 --seeds 0 --install
     python studies/rl_train_all.py --peer sac --only star-map,crowd-map --steps 1000000 \
         --seeds 0 --install
+    python studies/rl_train_all.py --peer il --steps 1000000 --seeds 0 --install
 
 Two peers. The second (the default, ``--peer second``): one policy per family at level
 ``map``, seeing what that level gives (``copi-local-v3``: the hits the static map does
@@ -15,7 +16,8 @@ configurations ``mix`` (all five families), one per family and ``chauffeur`` (th
 evader), with :data:`TUNING`'s ``lr1e-3``.
 
 The third (``--peer sac``): the second's observation and reward, learnt by SAC
-(:data:`SAC`), policies ``sac-F-map``.
+(:data:`SAC`), policies ``sac-F-map``. The fourth (``--peer il``): the second's, warm-started
+by imitating compass-guard (:data:`IMITATION`), policies ``ppo-il-F-map``.
 
 Each run is ``copi rl train`` with checkpoints, so an interrupted script resumes. The
 seed-0 policies are then copied into ``src/copi/data/rl`` by ``--install``, the other
@@ -75,6 +77,12 @@ defaults (lr 3e-4, 8 envs x 512 steps, batches of 512, entropy 0.005, log std -0
 128-128 tanh layers, 3 readings, proximity penalty 0.5, contact 10, the reward scaled by
 its running spread), then one change each: the raw reward, no proximity penalty, 2 or 5
 readings, a contact cost of 30, wider layers, and the first peer's settings."""
+IMITATION = {f"il-{f}-map": ["--families", f, "--levels", "map", "--imitate", "compass-guard"]
+             for f in FAMILIES}
+"""The imitation warm start (``--peer il``): the second peer's training from a clone of
+compass-guard (the hand-written method of the same level, DAgger's two rounds after its
+2,000 episodes), then PPO with copi rl train's defaults; policies ``ppo-il-F-map``. The
+network decides alone: nothing hand-written runs beside it."""
 SAC = ["--algo", "sac", "--batch-size", "256"]
 """The SAC peer's settings beside copi rl train's defaults (8 environments, one gradient
 step after each step of them, a buffer of 100k transitions, 10k random steps first):
@@ -105,7 +113,7 @@ def main() -> None:
     ap.add_argument("--out", default="results/rl")
     ap.add_argument("--only", default=None, help="comma-separated configurations")
     ap.add_argument("--tune", action="store_true", help="the settings (seed 0)")
-    ap.add_argument("--peer", choices=("first", "second", "sac"), default="second")
+    ap.add_argument("--peer", choices=("first", "second", "sac", "il"), default="second")
     # chosen by --tune (400k steps on the mix, validation seed 1: the highest mean of the
     # last three points of the learning curve; docs/rl.md has the table)
     ap.add_argument("--setting", default="lr1e-3", help="the setting of every run")
@@ -125,6 +133,10 @@ def main() -> None:
     elif a.tune:
         jobs = [(f"tune-{k}", [*CONFIGS["mix"], *FIRST, *v, "--seed", "0"])
                 for k, v in TUNING.items()]  # fmt: skip
+    elif a.peer == "il":
+        names = a.only.split(",") if a.only else list(IMITATION)
+        jobs = [(f"ppo-{name}-s{seed}", [*IMITATION[name], "--seed", seed])
+                for seed in a.seeds.split(",") for name in names]  # fmt: skip
     elif second or a.peer == "sac":
         names = a.only.split(",") if a.only else list(SECOND)
         algo, extra = ("ppo", []) if second else ("sac", SAC)
@@ -146,8 +158,8 @@ def main() -> None:
         print(f"{name}: {r['steps']:,} steps, {r['seconds']:.0f} s ({r['steps_per_second']:,.0f}"
               f"/s), validation success {100 * last['success']:.1f} %")
     if a.install:
-        _install(out, list(SECOND) if a.peer != "first" else list(CONFIGS),
-                 "ppo" if a.peer != "sac" else "sac")  # fmt: skip
+        configs = {"first": list(CONFIGS), "il": list(IMITATION)}.get(a.peer, list(SECOND))
+        _install(out, configs, "ppo" if a.peer != "sac" else "sac")
 
 
 def _install(out: Path, configs: list[str], algo: str = "ppo") -> None:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import shlex
 import sys
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
@@ -97,6 +97,18 @@ def train_command(
     validate_every: Annotated[
         int, typer.Option("--validate-every", min=1000, help="Steps between validations.")
     ] = 100_000,
+    imitate: Annotated[
+        str, typer.Option("--imitate", help="PPO: a registered method whose moves the policy "
+                          "clones first (at its level; DAgger), then PPO improves on it.")
+    ] = "",
+    imitation_episodes: Annotated[
+        int, typer.Option("--imitation-episodes", min=1, max=100_000,
+                          help="Episodes the demonstrator drives.")  # fmt: skip
+    ] = 2000,
+    dagger_rounds: Annotated[
+        int, typer.Option("--dagger-rounds", min=0, max=100,
+                          help="Rounds of the clone driving, the demonstrator labelling.")
+    ] = 2,
 ) -> None:
     """Train PPO or SAC (Stable-Baselines3) for a local policy in copi's factorisation: it sees
     its level's reading (at map, the hits the static map does not explain), the last
@@ -106,6 +118,7 @@ def train_command(
     Needs the extra rl."""
     from copi.errors import InvalidArgumentError
     from copi.rl import Reward, TrainConfig, check_apart, train
+    from copi.rl._imitate import check_demonstrator
 
     check_outputs({"the policy": (output, "policy"),
                    "the learning curve": (output.with_suffix(".json"), "json"),
@@ -124,8 +137,11 @@ def train_command(
         log_std=log_std, net=widths, reward=Reward(proximity=proximity, contact=contact),
         observation=observation, frames=frames, normalize_reward=normalize_reward,
         n_steps=n_steps, batch_size=batch_size, algorithm=algo, buffer_size=buffer_size,
-        learning_starts=learning_starts, gradient_steps=gradient_steps,
+        learning_starts=learning_starts, gradient_steps=gradient_steps, imitate=imitate,
+        imitation_episodes=imitation_episodes, dagger_rounds=dagger_rounds,
     )  # fmt: skip
+    if imitate:
+        check_demonstrator(imitate, config.levels[0])
     check_writable(output.parent, "the policy")  # before hours of training, not after
     if checkpoints is not None:
         check_writable(checkpoints, "checkpoints")
@@ -136,13 +152,24 @@ def train_command(
         out.print(f"training {config.planned_steps:,} steps: {how} (asked for {steps:,})")
     with progress() as bar:
         tid = bar.add_task("rl: environment steps", total=config.planned_steps)
+        cloning: dict[str, Any] = {}
+
+        def imitating(stage: str, done: int, total: int) -> None:
+            if stage not in cloning:
+                cloning[stage] = bar.add_task(stage, total=total)
+            bar.update(cloning[stage], completed=done)
+
         summary = train(config, output, checkpoints=checkpoints, validate_every=validate_every,
                         validation_episodes=validation_episodes, keep=keep,
                         progress=lambda done, total: bar.update(tid, completed=done),
                         resumed=lambda done: out.print(
                             f"resuming at {done:,} of {config.planned_steps:,} steps from "
                             f"{checkpoints}"),
-                        command=command)  # fmt: skip
+                        command=command, imitating=imitating)  # fmt: skip
+    if "imitation" in summary:
+        first = summary["curve"][0]
+        out.print(f"the clone of {imitate} ({summary['imitation']['states']:,} states): "
+                  f"validation success {100 * first['success']:.1f} % before PPO")
     out.print(
         f"{output}: {algo.upper()}, {summary['steps']:,} steps in {summary['seconds']:.0f} s "
         f"({summary['steps_per_second']:,.0f} steps/s), validation success "

@@ -186,6 +186,8 @@ class LocalPolicyEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         self._velocity = np.zeros(2)
         self.game: Any = None
         self.direction = np.zeros(2)
+        self.reach = 0.0
+        """How far the goal (or the route's next corner) lies along :attr:`direction`."""
 
     # -- episodes ---------------------------------------------------------------------
 
@@ -238,6 +240,7 @@ class LocalPolicyEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
                               position=sim.position if map_level else None)  # fmt: skip
             d, reach = self.steering.aim(obs)
             self.direction = np.asarray(d, dtype=np.float64)
+        self.reach = float(reach)
         if self.v3:
             static = sim.sensor.scan(sim.world, sim.position) if self.level == "map" else None
             x = features_v3(sim.ranges, self._history, static, self._velocity, self.direction,

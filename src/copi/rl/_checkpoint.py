@@ -253,10 +253,12 @@ def _check_meta(ckpt: Path, meta: dict[str, Any], config: TrainConfig) -> None:
     if not (_is_real(seconds) and 0 <= seconds <= YEAR):
         raise refuse("seconds", seconds, f"a wall time in 0 .. {YEAR:,} s (a year)")
     curve = meta.get("curve", _MISSING)
-    if not (isinstance(curve, list) and 1 <= len(curve) <= steps // rollout):
-        raise refuse("curve", curve, f"a learning curve of 1 to {steps // rollout:,} points, "
-                     "one at most per rollout")  # fmt: skip
-    last_steps, last_seconds = 0, 0.0
+    # a warm-started run's first point is its clone's, before any step of PPO
+    cloned = bool(config.imitate)
+    if not (isinstance(curve, list) and 1 <= len(curve) <= steps // rollout + cloned):
+        raise refuse("curve", curve, f"a learning curve of 1 to {steps // rollout + cloned:,} "
+                     "points, one at most per rollout")  # fmt: skip
+    last_steps, last_seconds = -1 if cloned else 0, 0.0
     for i, point in enumerate(curve):
         if not (isinstance(point, dict) and set(point) == {"steps", "seconds", "success"}):
             raise refuse(f"curve[{i}]", point, "a point of steps, seconds and success")

@@ -21,6 +21,7 @@ ALGORITHMS = ("ppo", "sac")
 squashed Gaussian, its entropy tuned to a target)."""
 _SAC_ONLY = ("buffer_size", "learning_starts", "gradient_steps", "tau")
 _PPO_ONLY = ("n_steps", "n_epochs", "ent_coef", "log_std")
+_IMITATION = ("imitate", "imitation_episodes", "dagger_rounds", "imitation_epochs")
 _CHECKPOINT_BYTES = 1 << 31
 """The most a checkpoint's tensors may weigh (its reader's limit)."""
 
@@ -82,6 +83,17 @@ class TrainConfig:
     normalize_reward: bool = True
     """Scale the reward by the running spread of its discounted return (SB3's
     VecNormalize, the observation left raw); the first peer trained without."""
+    imitate: str = ""
+    """PPO: a registered method whose moves the policy clones before PPO starts (an
+    imitation warm start, :mod:`copi.rl._imitate`; "" none). It runs at the policy's
+    level and needs no capabilities file."""
+    imitation_episodes: int = 2000
+    """Episodes the demonstrator drives (DAgger's first round); each later round, half
+    as many driven by the policy cloned so far."""
+    dagger_rounds: int = 2
+    """Rounds of DAgger after the first."""
+    imitation_epochs: int = 30
+    """Passes over the demonstrations at each round."""
 
     def __post_init__(self) -> None:
         if self.algorithm not in ALGORITHMS:
@@ -131,6 +143,21 @@ class TrainConfig:
         ):
             raise InvalidArgumentError(f"net must be 1 to {most} layer widths in 1 .. "
                                        f"{MAX_WIDTH}; got {self.net!r}")  # fmt: skip
+        if not isinstance(self.imitate, str):
+            raise InvalidArgumentError(f"imitate must be a method's name; got {self.imitate!r}")
+        if self.imitate:
+            if self.algorithm != "ppo" or self.task != "navigation" or len(self.levels) != 1:
+                raise InvalidArgumentError(
+                    "imitate needs PPO on navigation episodes at one level; got "
+                    f"{self.algorithm} on {self.task} at {', '.join(self.levels)}"
+                )
+            for key in ("imitation_episodes", "imitation_epochs"):
+                v = getattr(self, key)
+                if isinstance(v, bool) or not isinstance(v, int) or not 1 <= v <= 100_000:
+                    raise InvalidArgumentError(f"{key} must be an int in 1 .. 100,000; got {v!r}")
+            v = self.dagger_rounds
+            if isinstance(v, bool) or not isinstance(v, int) or not 0 <= v <= 100:
+                raise InvalidArgumentError(f"dagger_rounds must be an int in 0 .. 100; got {v!r}")
         if not isinstance(self.normalize_reward, bool):
             raise InvalidArgumentError("normalize_reward must be True or False; got "
                                        f"{self.normalize_reward!r}")  # fmt: skip
@@ -182,6 +209,9 @@ class TrainConfig:
         d["net"] = list(self.net)
         for key in ("algorithm", *_SAC_ONLY) if self.algorithm == "ppo" else _PPO_ONLY:
             del d[key]
+        if not self.imitate:  # as it was before the warm start came
+            for key in _IMITATION:
+                del d[key]
         return d
 
 

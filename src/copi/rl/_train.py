@@ -142,6 +142,7 @@ def train(
     resumed: Callable[[int], None] | None = None,
     command: str = "",
     keep: str = "best",
+    imitating: Callable[[str, int, int], None] | None = None,
 ) -> dict[str, Any]:
     """Train PPO or SAC as ``config`` says and write the exported policy to ``output`` (and
     ``output`` with ``.json`` and ``.png``: the learning curve). With ``checkpoints``, the
@@ -150,12 +151,19 @@ def train(
     last one (``resumed`` is told the steps it resumes at). ``progress(done, total)`` counts
     to :attr:`TrainConfig.planned_steps`. ``keep``: the policy written, ``"best"`` (the
     snapshot of the highest validation success, the latest of equals: model selection on
-    the validation seed, which no report uses) or ``"last"``. Returns the run's summary
+    the validation seed, which no report uses) or ``"last"``. With ``config.imitate``,
+    the policy first clones that method (:func:`copi.rl._imitate.warm_start`;
+    ``imitating(stage, done, total)`` follows it) and the clone is validated at step 0
+    (a resumed run finds it in its checkpoint). Returns the run's summary
     (steps, seconds, steps per second, curve, the steps of the policy kept)."""
     if keep not in ("best", "last"):
         raise InvalidArgumentError(f"keep must be best or last; got {keep!r}")
     check_apart(output, checkpoints)
     _need_rl()
+    if config.imitate:
+        from copi.rl._imitate import check_demonstrator
+
+        check_demonstrator(config.imitate, config.levels[0])
     import torch
     from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.callbacks import BaseCallback
@@ -205,6 +213,7 @@ def train(
     elapsed0 = 0.0
     checkpointed = 0  # steps of the last checkpoint written whole (0: none yet)
     ckpt = None if checkpoints is None else Path(checkpoints)
+    saved = None
     if ckpt is not None:
         ckpt.mkdir(parents=True, exist_ok=True)
         saved = _read_checkpoint(ckpt, config)
@@ -216,10 +225,14 @@ def train(
                 best = load_policy(ckpt / "best.npz")
             if resumed is not None:
                 resumed(int(model.num_timesteps))
+    t0 = time.perf_counter()
+    imitation: dict[str, Any] = {}
+    if config.imitate and saved is None:  # a resumed run has its clone in its checkpoint
+        from copi.rl._imitate import warm_start
+
+        imitation = warm_start(model, config, imitating)
     if progress is not None:
         progress(int(model.num_timesteps), config.planned_steps)
-
-    t0 = time.perf_counter()
 
     name = {"ppo": "PPO", "sac": "SAC"}[config.algorithm]
 
@@ -246,7 +259,7 @@ def train(
                 self.next = (model.num_timesteps // validate_every + 1) * validate_every
                 record()
 
-    def record() -> None:
+    def record(checkpoint: bool = True) -> None:
         nonlocal checkpointed, best
         seconds = elapsed0 + time.perf_counter() - t0
         now = snapshot()
@@ -261,11 +274,14 @@ def train(
             with _whole():
                 if improved:
                     save_policy(now, ckpt / "best.npz")
-                _write_checkpoint(ckpt, model, vec, config, curve, seconds, norm)
-                checkpointed = int(model.num_timesteps)
+                if checkpoint:
+                    _write_checkpoint(ckpt, model, vec, config, curve, seconds, norm)
+                    checkpointed = int(model.num_timesteps)
 
     left = config.steps - model.num_timesteps
     try:
+        if imitation:  # the clone's own validation, at step 0 (checkpoints come with PPO's)
+            record(checkpoint=False)
         if left > 0:
             model.learn(total_timesteps=left, callback=Watch(), reset_num_timesteps=False,
                         progress_bar=False)  # fmt: skip
@@ -287,6 +303,8 @@ def train(
         "config": config.identity(),
         "command": command,
     }
+    if imitation:
+        summary["imitation"] = imitation
     policy = export_policy(model, info={**config.identity(),
                                         "algorithm": f"{name} (Stable-Baselines3)",
                                         "steps_per_second": summary["steps_per_second"],

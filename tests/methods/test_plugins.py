@@ -179,3 +179,20 @@ def test_a_broken_entry_point_warns_in_python(broken_plugin: None) -> None:
     with pytest.warns(PluginWarning, match="cannot be loaded"):
         names = method_names()
     assert "dwa" in names and "broken" not in names
+
+
+def test_the_methods_table_shows_a_series_of_trained_methods_in_one_row() -> None:
+    """Methods that differ only by the family they were trained on share a row, naming
+    each family; a method alone keeps its own name and summary; every method is shown."""
+    from copi.methods import method_spec, methods_markdown
+
+    rows = methods_markdown().splitlines()[2:]
+    names = [r.split("`")[1] for r in rows]
+    row = rows[names.index("ppo-F-map")]
+    assert "the F family at map" in row and row.endswith("(F: star, polygon, indoor, maps, crowd) |")
+    assert "ppo-star-map" not in names and "compass-guard" in names
+    assert method_spec("ppo-chauffeur").summary in rows[names.index("ppo-chauffeur")]
+    shown = {n.replace("F", f) for n in names for f in ("star", "polygon", "indoor", "maps",
+                                                         "crowd")}  # fmt: skip
+    assert {n for n in method_names() if method_spec(n).factory.__module__.startswith("copi")} \
+        <= shown  # fmt: skip

@@ -68,6 +68,11 @@ _RL_POLICIES = [
     *[(f"sac-{f}-map", f"sac-{f}-map", 0.0, f"SAC trained on the {f} family at map, seeing "
        f"what ppo-{f}-map sees (copi-local-v3); nothing hand-written")
       for f in ("star", "crowd")],
+    # the imitation warm start (docs/rl.md): PPO from a clone of compass-guard
+    *[(f"ppo-il-{f}-map", f"ppo-il-{f}-map", 0.0, f"ppo-{f}-map's training started from a "
+       "clone of compass-guard (imitation, then DAgger), then PPO; the network decides "
+       "alone (the hand-written method was its teacher, not a filter)")
+      for f in ("star", "polygon", "indoor", "maps", "crowd")],
 ]  # fmt: skip
 
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import inspect
 import json
+import re
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any
@@ -252,6 +253,9 @@ def methods_markdown() -> str:
     """The table of copi's built-in methods (name, levels, extra, what it is) as the README
     and the docs show it: generated, never typed (a test compares the README with it)."""
     rows = ["| method | levels | needs | what it is |", "|---|---|---|---|"]
+    # one row for a series of methods that differ only by the family they were trained
+    # on (ppo-star-map, ppo-crowd-map, ...): its name and summary with F for the family
+    series: dict[tuple[str, ...], list[tuple[str, str, str]]] = {}
     for name in method_names():
         spec = method_spec(name)
         if spec.factory.__module__.split(".")[0] != "copi":
@@ -259,8 +263,25 @@ def methods_markdown() -> str:
         kind = " *(bound)*" if spec.bound else " *(ablation)*" if spec.ablation else ""
         extra = {"peers": "extra `peers`", "rl-weights": "shipped weights"}.get(
             spec.requires or "", "")
-        rows.append(f"| `{name}`{kind} | {', '.join(spec.levels)} | {extra} | {spec.summary} |")
+        parts = name.split("-")
+        family = next((f for f in _SERIES_FAMILIES if f in parts), None)
+        shown, summary = name, spec.summary
+        if family is not None:
+            shown = "-".join("F" if p == family else p for p in parts)
+            summary = re.sub(rf"\b{family}\b", "F", summary)
+        key = (shown, kind, ", ".join(spec.levels), extra, summary)
+        series.setdefault(key, []).append((name, spec.summary, family or ""))
+    for (shown, kind, levels, extra, summary), members in series.items():
+        if len(members) == 1:  # alone: as it is
+            shown, summary = members[0][0], members[0][1]
+        else:
+            summary = f"{summary} (F: {', '.join(m[2] for m in members)})"
+        rows.append(f"| `{shown}`{kind} | {levels} | {extra} | {summary} |")
     return "\n".join(rows) + "\n"
+
+
+_SERIES_FAMILIES = ("star", "polygon", "indoor", "maps", "crowd")
+"""The families whose trained methods :func:`methods_markdown` shows a row a series."""
 
 
 def method_spec(name: str) -> MethodSpec:

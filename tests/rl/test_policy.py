@@ -206,7 +206,10 @@ def test_every_shipped_policy_loads_and_says_how_it_was_trained() -> None:
         assert algo in ("ppo", "sac") and command.startswith(
             f"copi rl train -o results/rl/{algo}-"), (path.name, command)  # fmt: skip
         assert " --seed " in command and (" --algo sac " in command) == (algo == "sac")
-        assert f" --steps {2000000 if algo == 'ppo' else 1000000} " in command
+        # PPO 2M steps; SAC, and PPO warm-started by imitation, 1M
+        cloned = " --imitate " in command
+        assert f" --steps {2000000 if algo == 'ppo' and not cloned else 1000000} " in command
+        assert cloned == path.stem.startswith("ppo-il-")
         if path.parent.name == "seeds":
             seed = path.stem.rsplit("-s", 1)[1]
             assert command.endswith(f"--seed {seed}") and seed != "0"

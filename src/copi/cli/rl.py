@@ -117,8 +117,7 @@ def train_command(
     it, without torch), its learning curve on fixed validation episodes (.json, .png).
     Needs the extra rl."""
     from copi.errors import InvalidArgumentError
-    from copi.rl import Reward, TrainConfig, check_apart, train
-    from copi.rl._imitate import check_demonstrator
+    from copi.rl import Reward, TrainConfig, check_apart, check_demonstrator, train
 
     check_outputs({"the policy": (output, "policy"),
                    "the learning curve": (output.with_suffix(".json"), "json"),

@@ -7,6 +7,7 @@ optional extra ``rl``; running a trained policy does not."""
 from __future__ import annotations
 
 from copi.envs.local_policy import TRAINING_SEED, LocalPolicyEnv, Reward
+from copi.rl._imitate import check_demonstrator
 from copi.rl._sarl import SARLConfig, train_sarl, write_sarl
 from copi.rl._train import (
     VALIDATION_SEED,
@@ -27,6 +28,7 @@ __all__ = [
     "TrainConfig",
     "VALIDATION_SEED",
     "check_apart",
+    "check_demonstrator",
     "rl_available",
     "train",
     "train_sarl",

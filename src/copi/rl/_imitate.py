@@ -29,8 +29,7 @@ from copi.core import Observation
 from copi.envs.local_policy import LocalPolicyEnv
 from copi.errors import InvalidArgumentError
 from copi.methods import make_agent, method_spec
-from copi.runs import make_task
-from copi.runs._episode import velocity_of
+from copi.runs import make_task, velocity_of
 
 __all__ = ["check_demonstrator", "clone", "demonstrate", "warm_start"]
 

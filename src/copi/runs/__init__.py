@@ -33,6 +33,7 @@ from copi.runs._episode import (
     optimal_to_goal,
     run_episode,
     run_in_env,
+    velocity_of,
 )
 from copi.runs._executor import ExecutorError, InlineExecutor, make_executor
 from copi.runs._inputs import Inputs, check_family_inputs, code_version, resolve_inputs, run_id
@@ -79,5 +80,6 @@ __all__ = [
     "run_series",
     "skipped_row",
     "step_limit",
+    "velocity_of",
     "world_file_label",
 ]

@@ -324,8 +324,8 @@ def il_lines(succ: dict, rate: dict) -> list[str]:
         "episodes, the clone alone): more DAgger rounds (5), wider layers (256-256), more "
         "passes (50), a loss weighted toward moves away from the route: 72 to 83 % each, "
         "no better than the defaults' 82 %. The clones fail by contact with moving "
-        "obstacles where compass-guard turns by one compass step: the regression's "
-        "moves lie between the teacher's choices.",
+        "obstacles where compass-guard turns by one compass step. Every demonstration comes "
+        "from the training environment's pool of 1,000 episodes a family (PPO's too).",
         "",
         *[f"![ppo-il-{f}-map](rl-curve-il-{f}-map.png)" for f in IL_FAMILIES
           if (DOCS / f"rl-curve-il-{f}-map.png").is_file()],

@@ -162,3 +162,24 @@ def test_an_unknown_demonstrator_on_the_command_line_is_one_line(tmp_path: Path,
     code, _, err = run(["rl", "train", "-o", str(out), "--imitate", "moon"], capsys)
     assert code == 2 and "the demonstrator: method must be one of" in _one_line_error(code, err)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_the_pool_of_training_episodes_can_be_chosen() -> None:
+    """A pool of n episodes draws n distinct episodes at most; the default pool keeps a
+    run's identity (and the episodes it drew) as before the pool could be chosen."""
+    from copi.rl import LocalPolicyEnv, TrainConfig
+
+    env = LocalPolicyEnv(("star",), levels=("map",), episodes=3)
+    env.reset(seed=0)
+    starts = set()
+    for _ in range(30):
+        env.reset()
+        starts.add(tuple(np.round(env.sim.position, 9)))
+    assert 1 < len(starts) <= 3
+    assert "episodes" not in TrainConfig().identity()
+    assert TrainConfig(episodes=50_000).identity()["episodes"] == 50_000
+    for bad in (0, 2_000_000, 1.5, True):
+        with pytest.raises(InvalidArgumentError, match="episodes must be an int in 1 .. 1,000,000"):
+            LocalPolicyEnv(("star",), episodes=bad)
+        with pytest.raises(InvalidArgumentError, match="episodes must be an int in 1 .. 1,000,000"):
+            TrainConfig(episodes=bad)

@@ -105,6 +105,10 @@ def train_command(
         int, typer.Option("--imitation-episodes", min=1, max=100_000,
                           help="Episodes the demonstrator drives.")  # fmt: skip
     ] = 2000,
+    episodes: Annotated[
+        int, typer.Option("--episodes-per-family", min=1, max=1_000_000,
+                          help="A family's pool of training episodes.")  # fmt: skip
+    ] = 1000,
     dagger_rounds: Annotated[
         int, typer.Option("--dagger-rounds", min=0, max=100,
                           help="Rounds of the clone driving, the demonstrator labelling.")
@@ -137,7 +141,7 @@ def train_command(
         observation=observation, frames=frames, normalize_reward=normalize_reward,
         n_steps=n_steps, batch_size=batch_size, algorithm=algo, buffer_size=buffer_size,
         learning_starts=learning_starts, gradient_steps=gradient_steps, imitate=imitate,
-        imitation_episodes=imitation_episodes, dagger_rounds=dagger_rounds,
+        imitation_episodes=imitation_episodes, dagger_rounds=dagger_rounds, episodes=episodes,
     )  # fmt: skip
     if imitate:
         check_demonstrator(imitate, config.levels[0])

@@ -60,6 +60,9 @@ EPISODES_PER_FAMILY = 1000
 """Training episodes per family: episodes 0 .. 999 of the training seed, each drawn (and
 its static route planned) once per process, then copied at each reset (a reset costs
 0.2 ms instead of 15)."""
+MAX_POOL = 1_000_000
+"""The most training episodes a family's pool may hold (``episodes``; each drawn the
+first time it comes up, then kept)."""
 MAX_STEPS = 1_000_000
 """The longest episode :class:`LocalPolicyEnv` runs (``max_steps``), in steps."""
 _POOL: dict[tuple[str, int, int], Any] = {}
@@ -124,6 +127,10 @@ class LocalPolicyEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         ``"copi-local-v3"`` (one level's reading, stacked; ``levels`` must then name one).
     frames : int
         Readings a ``copi-local-v3`` observation stacks, in 2 .. 16.
+    episodes : int
+        A family's pool of training episodes: episodes 0 .. episodes - 1 of the seed, one
+        drawn at random at each reset, in 1 .. :data:`MAX_POOL` (default
+        :data:`EPISODES_PER_FAMILY`).
 
     Raises
     ------
@@ -145,6 +152,7 @@ class LocalPolicyEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         seed_of_episodes: int = TRAINING_SEED,
         observation: str = OBSERVATION,
         frames: int = 2,
+        episodes: int = EPISODES_PER_FAMILY,
     ) -> None:
         if task not in ("navigation", "chauffeur"):
             raise InvalidArgumentError(f"task must be navigation or chauffeur; got {task!r}")
@@ -167,6 +175,12 @@ class LocalPolicyEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
             raise InvalidArgumentError(f"max_steps must be a positive int, at most {MAX_STEPS:,} "
                                        f"(steps of one episode); got {max_steps!r}")  # fmt: skip
         self.max_steps = int(max_steps)
+        if not (isinstance(episodes, int | np.integer) and not isinstance(episodes, bool)
+                and 1 <= episodes <= MAX_POOL):  # fmt: skip
+            raise InvalidArgumentError(f"episodes must be an int in 1 .. {MAX_POOL:,} (a "
+                                       f"family's pool of training episodes); got "
+                                       f"{episodes!r}")  # fmt: skip
+        self.episodes = int(episodes)
         self._ended: str | None = "not started"
         # the episodes' generator is default_rng([seed_of_episodes, k]): a float, a
         # negative int or a bool would fail there, at the first reset, or draw elsewhere
@@ -200,13 +214,13 @@ class LocalPolicyEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
             self.sim = self.game.sim
             return
         family = self.families[int(rng.integers(len(self.families)))]
-        k = k % EPISODES_PER_FAMILY
+        k = k % self.episodes
         key = (family, k, self.seed_of_episodes)
         if key not in _POOL:
             sim, why = None, ""
             for attempt in range(20):
                 try:
-                    sim = draw_episode(family, k + EPISODES_PER_FAMILY * attempt,
+                    sim = draw_episode(family, k + self.episodes * attempt,
                                        self.seed_of_episodes)  # fmt: skip
                     break
                 except InvalidWorldError as exc:  # a world with no valid task: another one

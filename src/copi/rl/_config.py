@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from copi.baselines import MAX_LAYERS, MAX_WIDTH, OBSERVATION_V3, check_layout
-from copi.envs.local_policy import Reward
+from copi.envs.local_policy import EPISODES_PER_FAMILY, MAX_POOL, Reward
 from copi.errors import InvalidArgumentError
 from copi.world import check_family
 
@@ -83,6 +83,9 @@ class TrainConfig:
     normalize_reward: bool = True
     """Scale the reward by the running spread of its discounted return (SB3's
     VecNormalize, the observation left raw); the first peer trained without."""
+    episodes: int = EPISODES_PER_FAMILY
+    """A family's pool of training episodes (:class:`copi.envs.LocalPolicyEnv`'s
+    ``episodes``), for the demonstrations and for PPO."""
     imitate: str = ""
     """PPO: a registered method whose moves the policy clones before PPO starts (an
     imitation warm start, :mod:`copi.rl._imitate`; "" none). It runs at the policy's
@@ -143,6 +146,10 @@ class TrainConfig:
         ):
             raise InvalidArgumentError(f"net must be 1 to {most} layer widths in 1 .. "
                                        f"{MAX_WIDTH}; got {self.net!r}")  # fmt: skip
+        v = self.episodes
+        if isinstance(v, bool) or not isinstance(v, int) or not 1 <= v <= MAX_POOL:
+            raise InvalidArgumentError(f"episodes must be an int in 1 .. {MAX_POOL:,} (a family's "
+                                       f"pool of training episodes); got {v!r}")  # fmt: skip
         if not isinstance(self.imitate, str):
             raise InvalidArgumentError(f"imitate must be a method's name; got {self.imitate!r}")
         if self.imitate:
@@ -212,6 +219,8 @@ class TrainConfig:
         if not self.imitate:  # as it was before the warm start came
             for key in _IMITATION:
                 del d[key]
+        if self.episodes == EPISODES_PER_FAMILY:  # as it was before the pool could be chosen
+            del d["episodes"]
         return d
 
 

@@ -159,7 +159,7 @@ def warm_start(model: Any, config: Any, progress: Callable[[str, int, int], None
 
     env = LocalPolicyEnv(config.families, levels=config.levels, reward=config.reward,
                          max_steps=config.max_steps, observation=config.observation,
-                         frames=config.frames)  # fmt: skip
+                         frames=config.frames, episodes=config.episodes)  # fmt: skip
     env.reset(seed=config.seed * 1000 + 999)  # apart from the training environments'
     policy = model.policy
 

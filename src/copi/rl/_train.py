@@ -177,7 +177,8 @@ def train(
         def env() -> LocalPolicyEnv:
             e = LocalPolicyEnv(config.families, levels=config.levels, task=config.task,
                                reward=config.reward, max_steps=config.max_steps,
-                               observation=config.observation, frames=config.frames)  # fmt: skip
+                               observation=config.observation, frames=config.frames,
+                               episodes=config.episodes)  # fmt: skip
             e.reset(seed=config.seed * 1000 + i)
             return e
 

@@ -209,6 +209,14 @@ def second_peer_lines(succ: dict, rate: dict) -> list[str]:
     return [*lines, ""]
 
 
+def _shipped(name: str) -> tuple[dict, str]:
+    """The run that trained shipped policy ``name`` (its .json beside the weights) and
+    its steps and minutes as a cell ("—" when not shipped)."""
+    path = SEEDS.parent / f"{name}.json"
+    info = json.loads(path.read_text()) if path.is_file() else {}
+    return info, f"{info['steps']:,} in {info['seconds'] / 60:.0f} min" if info else "—"
+
+
 def sac_lines(succ: dict, rate: dict) -> list[str]:
     """The second algorithm's section: SAC beside PPO on the same observation, both beside
     straight, compass-guard and copi-predictive, on the same episodes."""
@@ -219,10 +227,8 @@ def sac_lines(succ: dict, rate: dict) -> list[str]:
                                                          "copi-predictive")}  # fmt: skip
         if any(v is None for v in arms.values()):
             continue
-        shipped = SEEDS.parent / f"sac-{fam}-map.json"  # what trained the shipped policy
-        info = json.loads(shipped.read_text()) if shipped.is_file() else {}
+        _, took = _shipped(sac)
         ok = _learnt(rate, fam, sac)
-        took = f"{info['steps']:,} in {info['seconds'] / 60:.0f} min" if info else "—"
         rows.append(
             f"| {fam} | {_pct(rate[fam, 'straight', 'map'])} | "
             f"{_pct(rate[fam, 'compass-guard', 'map'])} | "
@@ -269,9 +275,7 @@ def il_lines(succ: dict, rate: dict) -> list[str]:
                                                         "copi-predictive")}  # fmt: skip
         if any(v is None for v in arms.values()):
             continue
-        shipped = SEEDS.parent / f"ppo-il-{fam}-map.json"  # what trained the shipped policy
-        info = json.loads(shipped.read_text()) if shipped.is_file() else {}
-        took = f"{info['steps']:,} in {info['seconds'] / 60:.0f} min" if info else "—"
+        info, took = _shipped(il)
         rows.append(
             f"| {fam} | {_pct(rate[fam, 'straight', 'map'])} | "
             f"{_pct(rate[fam, 'compass-guard', 'map'])} | "

@@ -109,6 +109,13 @@ def demonstrate(
             np.asarray(ys, dtype=np.float32).reshape(n, 2), wins / max(episodes, 1))  # fmt: skip
 
 
+def _actor_mean(policy: Any, x: Any) -> Any:
+    """The mean action of Stable-Baselines3 PPO ``policy``'s actor for observations ``x``
+    (a tensor, one row each): what :func:`clone` fits and the clone drives by."""
+    features = policy.extract_features(x, policy.pi_features_extractor)
+    return policy.action_net(policy.mlp_extractor.forward_actor(features))
+
+
 def clone(
     policy: Any,
     x: NDArray[np.float32],
@@ -138,9 +145,7 @@ def clone(
         total = 0.0
         for i in range(0, len(xt), batch_size):
             idx = order[i : i + batch_size]
-            features = policy.extract_features(xt[idx], policy.pi_features_extractor)
-            mean = policy.action_net(policy.mlp_extractor.forward_actor(features))
-            loss = torch.nn.functional.mse_loss(mean, yt[idx])
+            loss = torch.nn.functional.mse_loss(_actor_mean(policy, xt[idx]), yt[idx])
             opt.zero_grad()
             loss.backward()
             opt.step()
@@ -165,8 +170,7 @@ def warm_start(model: Any, config: Any, progress: Callable[[str, int, int], None
 
     def act(x: NDArray[np.float32]) -> NDArray[np.float64]:
         with torch.no_grad():
-            f = policy.extract_features(torch.as_tensor(x[None]), policy.pi_features_extractor)
-            mean = policy.action_net(policy.mlp_extractor.forward_actor(f))
+            mean = _actor_mean(policy, torch.as_tensor(x[None]))
         return mean[0].numpy().astype(np.float64)
 
     rounds: list[dict[str, float]] = []

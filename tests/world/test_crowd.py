@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 from copi.errors import InvalidArgumentError
 from copi.geometry.kernels import closest_approach
 from copi.world import RangeSensor, World
+from copi.world._crowd_kernels import clip_actions
 from copi.world.crowd import (
     COLLISION,
     GAP_EXACT,
@@ -197,3 +198,52 @@ def test_actions_are_checked() -> None:
     bad[3, 1] = np.nan
     with pytest.raises(InvalidArgumentError, match="agent 3"):
         crowd.step(bad)
+
+
+@settings(max_examples=40, deadline=None)
+@given(rows=st.lists(st.tuples(st.floats(-1e6, 1e6) | st.sampled_from([0.0, 1.0, -1.0]),
+                               st.floats(-1e6, 1e6) | st.sampled_from([0.0, 1.0, -1.0]),
+                               st.booleans()),
+                     min_size=1, max_size=20))  # fmt: skip
+def test_actions_are_clipped_as_numpy_clips_them(rows: list[tuple[float, float, bool]]) -> None:
+    """The compiled clip is numpy's, bit for bit: an agent out of the world moves by 0,
+    an action longer than 1 is divided by its norm (``np.hypot``); a NaN in a row of an
+    agent out of the world is ignored, in one in the world reported."""
+    a = np.array([r[:2] for r in rows])
+    active = np.array([r[2] for r in rows])
+    want = np.where(active[:, None], a, 0.0)
+    norm = np.hypot(want[:, 0], want[:, 1])
+    over = norm > 1.0
+    want[over] /= norm[over, None]
+    out = np.empty_like(a)
+    assert clip_actions(a, active, out) == -1
+    assert out.tobytes() == want.tobytes()
+    a[0, 1] = np.nan
+    assert clip_actions(a, active, out) == (0 if active[0] else -1)
+
+
+@pytest.mark.parametrize("leave", [False, True])
+def test_the_next_step_may_start_once_the_agents_moved(leave: bool) -> None:
+    """``moved`` is called once a step, when what the next step reads is settled (the
+    positions, new goals, who is in the world, the step's number); in a steady crowd
+    before the step's books (the velocities still the last step's), with trips that
+    end, after them."""
+    crowd = Crowd.draw(crowd_room(80, 0.3), 80, seed=3)
+    seen: list[tuple[int, np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []
+
+    def moved() -> None:
+        seen.append((crowd.t, crowd.positions.copy(), crowd.goals.copy(),
+                     crowd.active.copy(), crowd.velocities.copy()))  # fmt: skip
+
+    for t in range(1, 30):
+        before = crowd.velocities.copy()
+        crowd.step(crowd.goals - crowd.positions, leave=leave, moved=moved)
+        assert len(seen) == t
+        step, pos, goals, active, vel = seen[-1]
+        assert step == crowd.t == t
+        assert np.array_equal(pos, crowd.positions) and np.array_equal(goals, crowd.goals)
+        assert np.array_equal(active, crowd.active)
+        assert np.array_equal(vel, crowd.velocities if leave else before)
+    assert (crowd.arrivals > 0).any()
+    if leave:
+        assert not crowd.active.all()

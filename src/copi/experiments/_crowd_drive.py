@@ -321,10 +321,10 @@ class Team:
         crowd's present positions."""
         crowd = self.crowd
         if self.chunks:
-            with self.lock:
-                self.ctl[:] = (crowd.t, 0, 0)
-        for _, conn in self.workers:
-            conn.send(crowd.t)
+            self.start()
+        else:
+            for _, conn in self.workers:
+                conn.send(crowd.t)
         crowd.index()
         if self.chunks:
             self.take_chunks(crowd.t)
@@ -339,6 +339,31 @@ class Team:
                 raise _died(proc) from None
             _raise_reported(answer)
         return self.actions
+
+    _started = -1
+    """The last step whose chunks were handed out."""
+
+    def start(self) -> None:
+        """Hand out the chunks of the crowd's present step (:attr:`Crowd.t`) to the other
+        processes, once (:meth:`decide` then joins them): called as soon as the step's
+        positions, goals and agents in the world are settled (:attr:`moved`), the other
+        processes sense and decide while this one still keeps the last step's books."""
+        t = self.crowd.t
+        if not self.chunks or self._started == t:
+            return
+        self._started = t
+        with self.lock:
+            self.ctl[:] = (t, 0, 0)
+        for _, conn in self.workers:
+            conn.send(t)
+
+    @property
+    def moved(self) -> Callable[[], None] | None:
+        """What to hand :meth:`Crowd.step` as ``moved``: :meth:`start` where the agents are
+        shared out in chunks (the batched driver, which reads the positions, the goals and
+        the readings only); else None (a driver of its own slice may read the velocities,
+        which the step's books settle last)."""
+        return self.start if self.chunks else None
 
     def take_chunks(self, t: int, *, index: bool = False, notify: Any = None) -> None:
         """Take the chunks of step t still free, one at a time, and scan and decide for

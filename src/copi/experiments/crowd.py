@@ -249,7 +249,10 @@ def run_crowd(
         t0 = time.perf_counter()
         for t in range(config.steps):
             actions = team.decide()
-            crowd.step(actions, leave=not config.steady, sense=False)
+            # the next step's sensing starts in the other processes while this one keeps
+            # the books of this step (not after the last)
+            moved = team.moved if t + 1 < config.steps else None
+            crowd.step(actions, leave=not config.steady, sense=False, moved=moved)
             if progress is not None:
                 progress(t + 1)
             if not crowd.active.any():

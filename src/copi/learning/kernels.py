@@ -156,23 +156,38 @@ def safety_of(net_t, k, shift, feat, n):  # type: ignore[no-untyped-def]
     """P(safe) by network ``k`` of ``net_t`` (:func:`kernel_net`; 0: a move along ray 0,
     1: waiting) of the features in ``feat`` (:func:`ring_features`) turned by ``shift``
     rays. No fastmath: every sum runs in the order written, the same on every processor.
-    A feature of exactly 0 (a ray that did not change, did not come nearer, or whose hit
-    the static map explains: a third of them or more) is skipped: adding its products,
-    each +-0, leaves every sum as it is (a -0 sum may become +0, which neither the ReLU
-    nor any later sum tells apart), so the probability is the same, bit for bit."""
+
+    The features are taken eight at a time, each hidden unit's sum still adding them in
+    turn (((z + w1 f1) + w2 f2) + ...): the same sums, bit for bit, with an eighth of the
+    trips through the units' partial sums in memory (which the compiled loop cannot keep
+    in registers; measured, 0.52 -> 0.34 us an evaluation of 16 units and 32 rays). A
+    product of a feature that is exactly 0 is +-0, which leaves a sum as it is (a -0 sum
+    may become +0, which neither the ReLU nor any later sum tells apart)."""
     h = net_t.shape[2]
     last = net_t.shape[1] - 2
-    z = net_t[k, 0].copy()
+    w = net_t[k]
+    z = w[0].copy()
     for b in range(N_BLOCKS):
         w0 = 1 + b * n
         f0 = 2 * b * n + shift
-        for j in range(n):
+        j = 0
+        while j + 8 <= n:
+            g = f0 + j
+            f1, f2, f3, f4 = feat[g], feat[g + 1], feat[g + 2], feat[g + 3]
+            f5, f6, f7, f8 = feat[g + 4], feat[g + 5], feat[g + 6], feat[g + 7]
+            q = w0 + j
+            r1, r2, r3, r4 = w[q], w[q + 1], w[q + 2], w[q + 3]
+            r5, r6, r7, r8 = w[q + 4], w[q + 5], w[q + 6], w[q + 7]
+            for u in range(h):
+                z[u] = (((((((z[u] + r1[u] * f1) + r2[u] * f2) + r3[u] * f3) + r4[u] * f4)
+                          + r5[u] * f5) + r6[u] * f6) + r7[u] * f7) + r8[u] * f8  # fmt: skip
+            j += 8
+        while j < n:  # the rays left over (a ring of other than a multiple of 8)
             f = feat[f0 + j]
-            if f == 0.0:
-                continue
-            row = net_t[k, w0 + j]
+            row = w[w0 + j]
             for u in range(h):
                 z[u] += row[u] * f
+            j += 1
     z2 = net_t[k, last + 1, 0]
     out_w = net_t[k, last]
     for u in range(h):

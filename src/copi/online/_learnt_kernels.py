@@ -194,16 +194,15 @@ def _learnt_choose(  # type: ignore[no-untyped-def]
     if all_p:
         safety_probabilities(s, prev, seen, net, n_dir, feat, p)
     rung = all_p  # the ring's features, computed when the network first needs them
-    now = np.inf
-    hit = np.inf  # the nearest hit, and the nearest the static map does not explain
+    now = np.inf  # the nearest range, and the nearest hit the static map does not explain
     moving = np.inf
     for i in range(s.shape[0]):
-        if s[i] < now:
-            now = s[i]
-        if s[i] < max_range:
-            hit = min(hit, s[i])
-            if s[i] < static[i] - EXPLAINED:
-                moving = min(moving, s[i])
+        r = s[i]
+        if r < now:
+            now = r
+        if r < moving and r < max_range and r < static[i] - EXPLAINED:
+            moving = r
+    hit = now if now < max_range else np.inf  # the nearest hit
     wall = min(_WALL, now - 1e-6)
     roomy = min(0.35, now - 1e-6)
     hits = work[:2, :n]

@@ -188,6 +188,29 @@ def scan_agents(positions, active, lo, hi, cos, sin, segs, radius, max_range, x0
 
 
 @njit(cache=True)
+def clip_actions(actions, active, out):  # type: ignore[no-untyped-def]
+    """``out[i]``: agent i's action (N, 2) if it is in the world (``active``), else 0,
+    scaled to norm 1 if longer (divided by its norm, ``np.hypot``'s). Returns the first
+    agent in the world whose action is not finite (``out`` then unfinished), else -1."""
+    for i in range(actions.shape[0]):
+        if not active[i]:
+            out[i, 0] = 0.0
+            out[i, 1] = 0.0
+            continue
+        ax = actions[i, 0]
+        ay = actions[i, 1]
+        if not (math.isfinite(ax) and math.isfinite(ay)):
+            return i
+        norm = np.hypot(ax, ay)
+        if norm > 1.0:
+            ax = ax / norm
+            ay = ay / norm
+        out[i, 0] = ax
+        out[i, 1] = ay
+    return -1
+
+
+@njit(cache=True)
 def move_agents(positions, actions, active, segs, radius, old, blocked):  # type: ignore[no-untyped-def]
     """Move each active agent by its action (already clipped to norm 1), stopped by the
     walls (:func:`copi.geometry.kernels.move_one`); ``old`` receives the positions before."""
@@ -253,14 +276,23 @@ def agent_gaps(old, positions, active, radius, exact, x0, y0, h, nx, ny, start, 
 
 
 @njit(cache=True)
-def account(positions, old, goals, was, gap, tolerance, t, leave, velocities, path_length,  # type: ignore[no-untyped-def]
-            contacts, min_gap, arrivals, outcome, ended, trip_length, active, contact,
-            reached, left):  # fmt: skip
+def arrived(positions, goals, was, tolerance, reached):  # type: ignore[no-untyped-def]
+    """``reached[i]``: agent i, in the world for the step just taken (``was``), ended it
+    with its centre within ``tolerance`` of its goal."""
+    for i in range(positions.shape[0]):
+        dx = positions[i, 0] - goals[i, 0]
+        dy = positions[i, 1] - goals[i, 1]
+        reached[i] = was[i] and np.hypot(dx, dy) <= tolerance
+
+
+@njit(cache=True)
+def account(positions, old, was, gap, reached, t, leave, velocities, path_length, contacts,  # type: ignore[no-untyped-def]
+            min_gap, arrivals, outcome, ended, trip_length, active, contact, left):  # fmt: skip
     """The books of step ``t`` (the step just taken, from ``old`` to ``positions``, by
-    the agents ``was`` in the world) in one pass: each agent's velocity, path length,
-    contacts (``gap`` below 0), least gap, arrivals (within ``tolerance`` of its goal),
-    its first trip's outcome (:data:`SUCCESS`, :data:`COLLISION`), end and length; with ``leave``,
-    an agent whose trip ended leaves (``active``). ``contact``, ``reached`` and ``left``
+    the agents ``was`` in the world; ``reached``: :func:`arrived`) in one pass: each
+    agent's velocity, path length, contacts (``gap`` below 0), least gap, arrivals, its
+    first trip's outcome (:data:`SUCCESS`, :data:`COLLISION`), end and length; with
+    ``leave``, an agent whose trip ended leaves (``active``). ``contact`` and ``left``
     receive the step's flags. The same sums, in the same order, as the arrays'."""
     for i in range(positions.shape[0]):
         vx = positions[i, 0] - old[i, 0]
@@ -269,11 +301,8 @@ def account(positions, old, goals, was, gap, tolerance, t, leave, velocities, pa
         velocities[i, 1] = vy
         path_length[i] += np.hypot(vx, vy)
         c = gap[i] < 0.0
-        dx = positions[i, 0] - goals[i, 0]
-        dy = positions[i, 1] - goals[i, 1]
-        r = was[i] and np.hypot(dx, dy) <= tolerance
+        r = reached[i]
         contact[i] = c
-        reached[i] = r
         contacts[i] += c
         if gap[i] < min_gap[i]:
             min_gap[i] = gap[i]

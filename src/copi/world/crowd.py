@@ -28,6 +28,7 @@ Examples
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -296,6 +297,7 @@ class Crowd:
         self._fill = np.empty(cells, dtype=np.int64)
         self._ordered = np.empty((n, 2))
         self._old = np.empty_like(self.positions)
+        self._actions = np.empty_like(self.positions)
         self._blocked = np.empty(n, dtype=np.bool_)
         self._gap = np.empty(n)
         self._near = np.empty(n, dtype=np.int64)
@@ -372,7 +374,14 @@ class Crowd:
 
     # -- one step -----------------------------------------------------------------------
 
-    def step(self, actions: Any, *, leave: bool = True, sense: bool = True) -> CrowdStep:
+    def step(
+        self,
+        actions: Any,
+        *,
+        leave: bool = True,
+        sense: bool = True,
+        moved: Callable[[], None] | None = None,
+    ) -> CrowdStep:
         """Advance one step: every agent in the world moves by its row of ``actions``
         (N, 2) (clipped to norm 1; rows of agents out of the world are ignored), stopped
         by walls; contacts are the closest approaches of the linear moves.
@@ -380,42 +389,53 @@ class Crowd:
         With ``leave`` an agent whose trip ends (its goal, or a contact) leaves the world;
         without, it stays: a new goal on arrival, contacts only counted. Then the grid is
         rebuilt and every agent still in scans (``sense=False``: the caller scans,
-        e.g. in slices)."""
+        e.g. in slices).
+
+        ``moved()`` is called as soon as what the next step reads is settled: the
+        positions, the goals and who is in the world (:attr:`t` already the new step).
+        Without ``leave`` that is before the step's contacts are measured (no agent
+        leaves, and a new goal depends on the arrival alone), so that the next step's
+        sensing may start while this one's books are kept (:class:`Team` starts its
+        other processes there); with ``leave``, after them. Until the call returns,
+        the books (contacts, gaps, :attr:`velocities`, the outcomes) are the last
+        step's."""
         n = self.n_agents
         a = np.asarray(actions, dtype=np.float64)
         if a.shape != (n, 2):
             raise InvalidArgumentError(f"actions must have shape ({n}, 2); got {a.shape}")
-        a = np.where(self.active[:, None], a, 0.0)
-        if not np.isfinite(a).all():
-            bad = int(np.argmin(np.isfinite(a).all(axis=1)))
+        clipped = self._actions
+        bad = kernels.clip_actions(a, self.active, clipped)
+        if bad >= 0:
             raise InvalidArgumentError(
                 f"actions must be finite; agent {bad}'s is {a[bad].tolist()}"
             )
-        norm = np.hypot(a[:, 0], a[:, 1])
-        over = norm > 1.0
-        a[over] /= norm[over, None]
         x0, y0, h, nx, ny = self._grid
         was = self.active.copy()
-        kernels.move_agents(self.positions, np.ascontiguousarray(a), was, self.world.segments,
-                            self.radius, self._old, self._blocked)  # fmt: skip
-        # the grid still holds the positions before the move, as agent_gaps needs
-        kernels.agent_gaps(self._old, self.positions, was, self.radius, GAP_EXACT,
-                           x0, y0, h, nx, ny, self._start, self._items, self._ordered,
-                           self._gap)  # fmt: skip
-        gap = self._gap.copy()
-        self.t += 1
-        contact = np.empty(n, dtype=np.bool_)
+        kernels.move_agents(self.positions, clipped, was, self.world.segments, self.radius,
+                            self._old, self._blocked)  # fmt: skip
         reached = np.empty(n, dtype=np.bool_)
-        left = np.empty(n, dtype=np.bool_)
-        kernels.account(self.positions, self._old, self.goals, was, gap, self.goal_tolerance,
-                        self.t, leave, self.velocities, self.path_length, self.contacts,
-                        self.min_gap, self.arrivals, self.outcome, self.ended,
-                        self.trip_length, self.active, contact, reached, left)  # fmt: skip
+        kernels.arrived(self.positions, self.goals, was, self.goal_tolerance, reached)
+        self.t += 1
         if not leave:
             rows = np.flatnonzero(reached)
             if len(rows):
                 self.goals[rows] = _draw_goals(self.world, self.rng, self.positions[rows],
                                                self.radius, self.min_distance)  # fmt: skip
+            if moved is not None:
+                moved()
+        # the grid still holds the positions before the move, as agent_gaps needs
+        kernels.agent_gaps(self._old, self.positions, was, self.radius, GAP_EXACT,
+                           x0, y0, h, nx, ny, self._start, self._items, self._ordered,
+                           self._gap)  # fmt: skip
+        gap = self._gap.copy()
+        contact = np.empty(n, dtype=np.bool_)
+        left = np.empty(n, dtype=np.bool_)
+        kernels.account(self.positions, self._old, was, gap, reached, self.t, leave,
+                        self.velocities, self.path_length, self.contacts, self.min_gap,
+                        self.arrivals, self.outcome, self.ended, self.trip_length,
+                        self.active, contact, left)  # fmt: skip
+        if leave and moved is not None:
+            moved()
         if sense:
             self.sense()
         self._record()

@@ -5,6 +5,7 @@
     python studies/rl_train_all.py --peer sac --only star-map,crowd-map --steps 1000000 \
         --seeds 0 --install
     python studies/rl_train_all.py --peer il --steps 1000000 --seeds 0 --install
+    python studies/rl_train_all.py --peer clone --seeds 0 --install
 
 Two peers. The second (the default, ``--peer second``): one policy per family at level
 ``map``, seeing what that level gives (``copi-local-v3``: the hits the static map does
@@ -17,7 +18,9 @@ evader), with :data:`TUNING`'s ``lr1e-3``.
 
 The third (``--peer sac``): the second's observation and reward, learnt by SAC
 (:data:`SAC`), policies ``sac-F-map``. The fourth (``--peer il``): the second's, warm-started
-by imitating compass-guard (:data:`IMITATION`), policies ``ppo-il-F-map``.
+by imitating compass-guard (:data:`IMITATION`), policies ``ppo-il-F-map``. The fifth
+(``--peer clone``): no RL, a classifier of compass-guard's moves (:data:`CLONE`), policies
+``clone-F-map``.
 
 Each run is ``copi rl train`` with checkpoints, so an interrupted script resumes. The
 seed-0 policies are then copied into ``src/copi/data/rl`` by ``--install``, the other
@@ -83,6 +86,14 @@ IMITATION = {f"il-{f}-map": ["--families", f, "--levels", "map", "--imitate", "c
 compass-guard (the hand-written method of the same level, DAgger's two rounds after its
 2,000 episodes), then PPO with copi rl train's defaults; policies ``ppo-il-F-map``. The
 network decides alone: nothing hand-written runs beside it."""
+CLONE = {f"{f}-map": ["--algo", "clone", "--imitate", "compass-guard", "--families", f,
+                      "--levels", "map", "--episodes-per-family", "50000", "--net", "256,256"]
+         for f in FAMILIES}  # fmt: skip
+"""The clone (``--peer clone``): compass-guard's moves at map classified (a step along
+each ray of the frame, or none), its 2,000 episodes then DAgger's two rounds, from a
+family's pool of 50,000 training episodes (from the pool of 1,000 PPO trains on, the clone
+remembered its episodes: docs/rl.md), 256-256 tanh layers; policies ``clone-F-map``.
+No RL steps and no checkpoints (minutes a family)."""
 SAC = ["--algo", "sac", "--batch-size", "256"]
 """The SAC peer's settings beside copi rl train's defaults (8 environments, one gradient
 step after each step of them, a buffer of 100k transitions, 10k random steps first):
@@ -96,8 +107,9 @@ def _run(name: str, args: list[str], out: Path, steps: int) -> dict:
     policy = out / f"{name}.npz"
     if policy.is_file() and (out / f"{name}.json").is_file():
         return json.loads((out / f"{name}.json").read_text())
-    cmd = [sys.executable, "-m", "copi", "rl", "train", "-o", str(policy), "--steps",
-           str(steps), "--checkpoints", str(out / f"{name}.ckpt"), *args]  # fmt: skip
+    rl = [] if "clone" in args else ["--steps", str(steps), "--checkpoints",
+                                      str(out / f"{name}.ckpt")]  # fmt: skip
+    cmd = [sys.executable, "-m", "copi", "rl", "train", "-o", str(policy), *rl, *args]
     t0 = time.perf_counter()
     done = subprocess.run(cmd, capture_output=True, text=True)
     if done.returncode != 0:
@@ -113,7 +125,8 @@ def main() -> None:
     ap.add_argument("--out", default="results/rl")
     ap.add_argument("--only", default=None, help="comma-separated configurations")
     ap.add_argument("--tune", action="store_true", help="the settings (seed 0)")
-    ap.add_argument("--peer", choices=("first", "second", "sac", "il"), default="second")
+    ap.add_argument("--peer", choices=("first", "second", "sac", "il", "clone"),
+                    default="second")  # fmt: skip
     # chosen by --tune (400k steps on the mix, validation seed 1: the highest mean of the
     # last three points of the learning curve; docs/rl.md has the table)
     ap.add_argument("--setting", default="lr1e-3", help="the setting of every run")
@@ -137,6 +150,10 @@ def main() -> None:
         names = a.only.split(",") if a.only else list(IMITATION)
         jobs = [(f"ppo-{name}-s{seed}", [*IMITATION[name], "--seed", seed])
                 for seed in a.seeds.split(",") for name in names]  # fmt: skip
+    elif a.peer == "clone":
+        names = a.only.split(",") if a.only else list(CLONE)
+        jobs = [(f"clone-{name}-s{seed}", [*CLONE[name], "--seed", seed])
+                for seed in a.seeds.split(",") for name in names]  # fmt: skip
     elif second or a.peer == "sac":
         names = a.only.split(",") if a.only else list(SECOND)
         algo, extra = ("ppo", []) if second else ("sac", SAC)
@@ -158,8 +175,9 @@ def main() -> None:
         print(f"{name}: {r['steps']:,} steps, {r['seconds']:.0f} s ({r['steps_per_second']:,.0f}"
               f"/s), validation success {100 * last['success']:.1f} %")
     if a.install:
-        configs = {"first": list(CONFIGS), "il": list(IMITATION)}.get(a.peer, list(SECOND))
-        _install(out, configs, "ppo" if a.peer != "sac" else "sac")
+        configs = {"first": list(CONFIGS), "il": list(IMITATION),
+                   "clone": list(CLONE)}.get(a.peer, list(SECOND))  # fmt: skip
+        _install(out, configs, {"sac": "sac", "clone": "clone"}.get(a.peer, "ppo"))
 
 
 def _install(out: Path, configs: list[str], algo: str = "ppo") -> None:

@@ -111,8 +111,8 @@ def test_a_demonstrator_it_cannot_imitate_is_one_line(change: dict[str, Any], me
 @pytest.mark.parametrize(
     ("change", "message"),
     [
-        ({"imitate": "straight", "algorithm": "sac"}, "imitate needs PPO on navigation"),
-        ({"imitate": "straight", "task": "chauffeur"}, "imitate needs PPO on navigation"),
+        ({"imitate": "straight", "algorithm": "sac"}, "imitate needs PPO or a clone on navigation"),
+        ({"imitate": "straight", "task": "chauffeur"}, "imitate needs PPO or a clone on navigation"),
         ({"imitate": "straight", "imitation_epochs": 0}, "imitation_epochs must be an int"),
         ({"imitate": "straight", "dagger_rounds": -1}, "dagger_rounds must be an int in 0"),
         ({"imitate": 3}, "imitate must be a method's name; got 3"),

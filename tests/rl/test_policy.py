@@ -201,8 +201,14 @@ def test_every_shipped_policy_loads_and_says_how_it_was_trained() -> None:
     files = sorted(POLICIES.glob("*.npz")) + sorted((POLICIES / "seeds").glob("*.npz"))
     assert len(files) >= 7
     for path in files:
-        command = load_policy(path).info.get("command", "")
-        algo = path.stem.split("-")[0]  # ppo-... or sac-...
+        policy = load_policy(path)
+        command = policy.info.get("command", "")
+        algo = path.stem.split("-")[0]  # ppo-..., sac-... or clone-...
+        if algo == "clone":  # no RL: a classifier of its demonstrator's moves
+            assert command.startswith("copi rl train --algo clone --imitate compass-guard ")
+            assert f" -o results/rl/{path.stem}-s0.npz" in command and " --seed 0" in command
+            assert policy.output == "compass" and "steps" not in policy.info
+            continue
         assert algo in ("ppo", "sac") and command.startswith(
             f"copi rl train -o results/rl/{algo}-"), (path.name, command)  # fmt: skip
         assert " --seed " in command and (" --algo sac " in command) == (algo == "sac")
@@ -306,7 +312,7 @@ def test_a_v3_agent_runs_at_its_level_and_remembers_what_it_saw() -> None:
         ({"level": "oracle"}, "'level' must be sensor or map"),
         ({"level": "sensor"}, "layer 0 takes 133 inputs; expected the observation's 101"),
         ({"frames": 4}, "layer 0 takes 133 inputs; expected the observation's 165"),
-        ({"output": "relu"}, "metadata 'output' must be clip or tanh; got 'relu'"),
+        ({"output": "relu"}, "metadata 'output' must be one of clip, tanh, compass; got 'relu'"),
     ],
 )
 def test_v3_policy_files_round_trip_and_refuse_another_layout(

@@ -161,7 +161,7 @@ def test_a_short_training_beats_a_random_policy(tmp_path: Path) -> None:
         (["--observation", "pixels"], "observation must be one of"),
         (["--observation", "copi-local-v2", "--frames", "3"], "frames must be an int in 2"),
         (["--frames", "99"], "Invalid value for '--frames'"),
-        (["--algo", "dqn"], "algorithm must be one of ppo, sac; got 'dqn'"),
+        (["--algo", "dqn"], "algorithm must be one of ppo, sac, clone; got 'dqn'"),
         (["--episodes-per-family", "0"], "Invalid value for '--episodes-per-family'"),
         (["--algo", "sac", "--buffer-size", "0"], "Invalid value for '--buffer-size'"),
         (["--algo", "sac", "--buffer-size", "4"], "buffer_size must be at least envs (8)"),

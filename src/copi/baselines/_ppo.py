@@ -40,7 +40,9 @@ reach           1           as above
 
 Its action is the network's mean output, clipped to [-1, 1] per component (PPO's; a SAC
 actor's, squashed by tanh: the policy's ``output``) and to norm 1, turned back to the
-world's frame.
+world's frame. A ``compass`` policy (a classifier, cloned from a demonstrator's moves:
+``copi rl train --algo clone``) instead scores N + 1 moves, a step along each ray of its
+frame or none, and takes the best (:func:`compass_move`).
 Training (``copi rl train``, the optional extra ``rl``: Stable-Baselines3 on torch)
 exports the actor's weights to an ``.npz`` of plain arrays (:func:`save_policy`), read
 here without torch and without pickle (:func:`load_policy`, validated as capabilities
@@ -64,6 +66,7 @@ from numpy.typing import NDArray
 from copi._files import write_npz
 from copi._npz import read_metadata, read_npz
 from copi.baselines._common import Steered
+from copi.baselines._compass import compass_move
 from copi.core import Observation, Task
 from copi.errors import CopiError, InvalidArgumentError
 from copi.online import kernels
@@ -77,6 +80,7 @@ __all__ = [
     "PolicyFormatError",
     "PolicyWeights",
     "check_layout",
+    "compass_move",
     "direction_frame",
     "features",
     "features_v3",
@@ -100,9 +104,10 @@ MAX_FRAMES = 16
 CHANGE_CLIP = 1.5
 """Largest change of a ray in one step the observation keeps (as contexts that see
 motion clip it)."""
-OUTPUTS = ("clip", "tanh")
+OUTPUTS = ("clip", "tanh", "compass")
 """How a policy's last layer becomes a velocity: its mean clipped to [-1, 1] (PPO's
-Gaussian policy) or squashed by tanh (SAC's), then to norm 1."""
+Gaussian policy) or squashed by tanh (SAC's), then to norm 1; or (``compass``) the best of
+N + 1 scores, one per ray of the frame and one for standing still (:func:`compass_move`)."""
 MAX_LAYERS = 8
 MAX_WIDTH = 1024
 MAX_WEIGHT = 1e4
@@ -287,11 +292,11 @@ class PolicyWeights:
     def __post_init__(self) -> None:
         check_layout(self.observation, self.frames)
         if self.output not in OUTPUTS:
-            raise InvalidArgumentError(f"a policy's output is {' or '.join(OUTPUTS)}; got "
+            raise InvalidArgumentError(f"a policy's output is one of {', '.join(OUTPUTS)}; got "
                                        f"{self.output!r}")  # fmt: skip
         if self.level not in ("sensor", "map"):
             raise InvalidArgumentError(f"a policy's level is sensor or map; got {self.level!r}")
-        _check_layers(self.layers, self.n_rays, "the policy", self.size)
+        _check_layers(self.layers, self.n_rays, "the policy", self.size, self.outputs)
         flat = np.concatenate([np.r_[w.T.ravel(), b] for w, b in self.layers])  # input-major
         shapes = np.array([w.shape for w, _ in self.layers], dtype=np.int64)
         object.__setattr__(self, "_flat", np.ascontiguousarray(flat, dtype=np.float64))
@@ -299,6 +304,12 @@ class PolicyWeights:
         width = int(max(max(w.shape) for w, _ in self.layers))
         # the forward pass's scratch rows, allocated once (a decision is a few us)
         object.__setattr__(self, "_buf", np.empty((2, width)))
+
+    @property
+    def outputs(self) -> int:
+        """The values its last layer gives: a velocity (2), or a ``compass`` policy's score
+        of each move (one a ray, and standing still)."""
+        return self.n_rays + 1 if self.output == "compass" else 2
 
     @property
     def size(self) -> int:
@@ -312,9 +323,11 @@ class PolicyWeights:
         if x.shape != (self.layers[0][0].shape[1],):
             raise ValueError(f"an observation of shape ({self.layers[0][0].shape[1]},) was "
                              f"expected; got {x.shape}")  # fmt: skip
-        out = np.empty(2)
+        out = np.empty(self.outputs)
         _forward(self._flat, self._shapes, x, self._buf, out,  # type: ignore[attr-defined]
-                 self.output == "tanh")  # fmt: skip
+                 ("clip", "tanh", "compass").index(self.output))  # fmt: skip
+        if self.output == "compass":
+            return compass_move(out, x, self.n_rays, self.max_range)
         return out
 
     def act_batch(self, x: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -324,6 +337,10 @@ class PolicyWeights:
             h = h @ w.T + b
             if i < len(self.layers) - 1:
                 np.tanh(h, out=h)
+        if self.output == "compass":
+            x = np.asarray(x, dtype=np.float64)
+            return np.array([compass_move(v, r, self.n_rays, self.max_range)
+                             for v, r in zip(h, x, strict=True)]).reshape(-1, 2)  # fmt: skip
         if self.output == "tanh":
             np.tanh(h, out=h)
         else:
@@ -335,13 +352,14 @@ class PolicyWeights:
 
 
 @numba.njit(cache=True)
-def _forward(flat, shapes, x, buf, out, squash):  # type: ignore[no-untyped-def]
+def _forward(flat, shapes, x, buf, out, mode):  # type: ignore[no-untyped-def]
     """The actor's forward pass over packed layers (numba: a Python loop of numpy calls
     costs ~2 us a layer, over the 10 us a decision may take). Each layer's weights are
     packed input-major (W transposed), so that one input updates every unit at once:
     the loop over units vectorises while each unit's sum keeps its order (inputs 0, 1,
-    ..., then the bias), the same on every processor (no fastmath). ``squash``: the
-    output through tanh (SAC's), else clipped (PPO's)."""
+    ..., then the bias), the same on every processor (no fastmath). ``mode`` (the
+    index in :data:`OUTPUTS`): 0 the velocity clipped (PPO's), 1 through tanh (SAC's),
+    2 the last layer's values as they are (a ``compass`` policy's scores)."""
     m = x.shape[0]
     a = buf[0]
     b = buf[1]
@@ -364,7 +382,11 @@ def _forward(flat, shapes, x, buf, out, squash):  # type: ignore[no-untyped-def]
             b[i] = math.tanh(s) if li < nl - 1 else s
         off += rows * cols + rows
         a, b = b, a
-    if squash:
+    if mode == 2:
+        for i in range(out.shape[0]):
+            out[i] = a[i]
+        return
+    if mode == 1:
         vx = math.tanh(a[0])
         vy = math.tanh(a[1])
     else:
@@ -378,7 +400,7 @@ def _forward(flat, shapes, x, buf, out, squash):  # type: ignore[no-untyped-def]
     out[1] = vy
 
 
-def _check_layers(layers: Any, n_rays: int, where: str, width: int) -> None:
+def _check_layers(layers: Any, n_rays: int, where: str, width: int, outputs: int = 2) -> None:
     if not isinstance(layers, tuple) or not 2 <= len(layers) <= MAX_LAYERS:
         got = len(layers) if isinstance(layers, tuple) else type(layers).__name__
         raise InvalidArgumentError(f"{where} must have 2 .. {MAX_LAYERS} layers; got {got}")
@@ -404,8 +426,10 @@ def _check_layers(layers: Any, n_rays: int, where: str, width: int) -> None:
                     f"+-{MAX_WEIGHT:g}, which no training yields"
                 )
         width = w.shape[0]
-    if width != 2:
-        raise InvalidArgumentError(f"{where}: the last layer gives {width} values; a velocity is 2")
+    if width != outputs:
+        what = "a velocity is 2" if outputs == 2 else \
+            f"a compass policy scores {outputs} moves ({n_rays} rays and standing still)"
+        raise InvalidArgumentError(f"{where}: the last layer gives {width} values; {what}")
 
 
 def save_policy(policy: PolicyWeights, path: str | os.PathLike[str]) -> Path:
@@ -447,7 +471,7 @@ def load_policy(path: str | os.PathLike[str]) -> PolicyWeights:
         raise PolicyFormatError(f"{p}: metadata 'frames' must be an int in 2 .. {MAX_FRAMES}")
     output = meta.get("output", "clip")  # absent from the files of PPO before SAC came
     if output not in OUTPUTS:
-        raise PolicyFormatError(f"{p}: metadata 'output' must be {' or '.join(OUTPUTS)}; got "
+        raise PolicyFormatError(f"{p}: metadata 'output' must be one of {', '.join(OUTPUTS)}; got "
                                 f"{output!r}"[:200])  # fmt: skip
     n_layers, n_rays, reach = meta.get("layers"), meta.get("n_rays"), meta.get("max_range")
     if not (isinstance(n_layers, int) and 2 <= n_layers <= MAX_LAYERS):

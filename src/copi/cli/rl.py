@@ -32,8 +32,10 @@ def train_command(
         str, typer.Option("--task", help="navigation, or chauffeur (the game's evader).")
     ] = "navigation",
     algo: Annotated[
-        str, typer.Option("--algo", help="ppo (on-policy) or sac (off-policy, a replay "
-                          "buffer; its own entropy target).")
+        str, typer.Option("--algo", help="ppo (on-policy), sac (off-policy, a replay "
+                          "buffer; its own entropy target), or clone (no RL: a classifier of "
+                          "--imitate's moves, DAgger, scoring a step along each ray and "
+                          "standing still).")
     ] = "ppo",
     steps: Annotated[int, typer.Option("--steps", min=1, help="Environment steps.")] = 2_000_000,
     seed: Annotated[int, seed_option("the network and the episodes' order")] = 0,
@@ -99,7 +101,8 @@ def train_command(
     ] = 100_000,
     imitate: Annotated[
         str, typer.Option("--imitate", help="PPO: a registered method whose moves the policy "
-                          "clones first (at its level; DAgger), then PPO improves on it.")
+                          "clones first (at its level; DAgger), then PPO improves on it; "
+                          "clone: the method cloned.")
     ] = "",
     imitation_episodes: Annotated[
         int, typer.Option("--imitation-episodes", min=1, max=100_000,
@@ -117,9 +120,9 @@ def train_command(
     """Train PPO or SAC (Stable-Baselines3) for a local policy in copi's factorisation: it sees
     its level's reading (at map, the hits the static map does not explain), the last
     --frames readings, its own velocity and its level's global direction, and acts with a
-    velocity. Writes the policy (numpy weights: copi.baselines.PPOAgent(weights=FILE) runs
-    it, without torch), its learning curve on fixed validation episodes (.json, .png).
-    Needs the extra rl."""
+    velocity (--algo clone: no RL, a classifier of --imitate's moves). Writes the policy
+    (numpy weights: copi.baselines.PPOAgent(weights=FILE) runs it, without torch), its
+    learning curve on fixed validation episodes (.json, .png). Needs the extra rl."""
     from copi.errors import InvalidArgumentError
     from copi.rl import Reward, TrainConfig, check_apart, check_demonstrator, train
 
@@ -149,12 +152,14 @@ def train_command(
     if checkpoints is not None:
         check_writable(checkpoints, "checkpoints")
     command = "copi " + " ".join(shlex.quote(a) for a in sys.argv[1:])
-    if config.planned_steps != steps:
+    clone = algo == "clone"
+    if config.planned_steps != steps and not clone:
         how = (f"PPO trains in whole rollouts of {config.envs} envs x {config.n_steps} steps"
                if algo == "ppo" else f"SAC steps its {config.envs} envs together")  # fmt: skip
         out.print(f"training {config.planned_steps:,} steps: {how} (asked for {steps:,})")
     with progress() as bar:
-        tid = bar.add_task("rl: environment steps", total=config.planned_steps)
+        tid = None if clone else bar.add_task("rl: environment steps",
+                                              total=config.planned_steps)  # fmt: skip
         cloning: dict[str, Any] = {}
 
         def imitating(stage: str, done: int, total: int) -> None:
@@ -164,11 +169,19 @@ def train_command(
 
         summary = train(config, output, checkpoints=checkpoints, validate_every=validate_every,
                         validation_episodes=validation_episodes, keep=keep,
-                        progress=lambda done, total: bar.update(tid, completed=done),
+                        progress=None if tid is None else
+                        lambda done, total: bar.update(tid, completed=done),
                         resumed=lambda done: out.print(
                             f"resuming at {done:,} of {config.planned_steps:,} steps from "
                             f"{checkpoints}"),
                         command=command, imitating=imitating)  # fmt: skip
+    if clone:
+        rounds = ", ".join(f"{100 * c['success']:.1f}" for c in summary["curve"])
+        out.print(f"{output}: the clone of {imitate} ({summary['states']:,} states, "
+                  f"{summary['seconds']:.0f} s); validation success by round {rounds} %; "
+                  f"kept: round {summary['kept_round']} "
+                  f"({100 * summary['kept_success']:.1f} %)")  # fmt: skip
+        return
     if "imitation" in summary:
         first = summary["curve"][0]
         out.print(f"the clone of {imitate} ({summary['imitation']['states']:,} states): "

@@ -73,6 +73,12 @@ _RL_POLICIES = [
        "clone of compass-guard (imitation, then DAgger), then PPO; the network decides "
        "alone (the hand-written method was its teacher, not a filter)")
       for f in ("star", "polygon", "indoor", "maps", "crowd")],
+    # the clone (docs/rl.md): no RL, a classifier of compass-guard's moves
+    *[(f"clone-{f}-map", f"clone-{f}-map", 0.0, f"a classifier of compass-guard's moves at "
+       f"map, learnt from its demonstrations in the {f} family (DAgger; a step along one of "
+       "the 32 rays of its frame, or none; no RL): the network decides alone, the step's "
+       "length near the goal is compass-guard's rule (hand-written)")
+      for f in ("star", "polygon", "indoor", "maps", "crowd")],
 ]  # fmt: skip
 
 

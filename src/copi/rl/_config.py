@@ -16,11 +16,15 @@ from copi.world import check_family
 __all__ = ["ALGORITHMS", "MAX_SEED", "TrainConfig"]
 
 MAX_SEED = 2**32 - 1
-ALGORITHMS = ("ppo", "sac")
+ALGORITHMS = ("ppo", "sac", "clone")
 """Stable-Baselines3's PPO (on-policy, a Gaussian policy) and SAC (off-policy, a
 squashed Gaussian, its entropy tuned to a target)."""
 _SAC_ONLY = ("buffer_size", "learning_starts", "gradient_steps", "tau")
 _PPO_ONLY = ("n_steps", "n_epochs", "ent_coef", "log_std")
+_NOT_CLONE = ("steps", "envs", "learning_rate", "batch_size", "gamma", "normalize_reward",
+              "reward")
+"""What no clone uses: it learns from its demonstrator's moves alone (Adam at 1e-3 in
+batches of 256, as the warm start's clone), no reward, no RL steps."""
 _IMITATION = ("imitate", "imitation_episodes", "dagger_rounds", "imitation_epochs")
 _CHECKPOINT_BYTES = 1 << 31
 """The most a checkpoint's tensors may weigh (its reader's limit)."""
@@ -38,7 +42,8 @@ class TrainConfig:
     task: str = "navigation"
     """"navigation" or "chauffeur" (the evader of Experiment 2's game)."""
     algorithm: str = "ppo"
-    """"ppo" or "sac" (:data:`ALGORITHMS`)."""
+    """"ppo", "sac" or "clone" (:data:`ALGORITHMS`): the last no RL at all, a classifier
+    of ``imitate``'s moves (DAgger; a ``compass`` policy, :mod:`copi.rl._imitate`)."""
     steps: int = 2_000_000
     """Environment steps of training."""
     seed: int = 0
@@ -152,10 +157,14 @@ class TrainConfig:
                                        f"pool of training episodes); got {v!r}")  # fmt: skip
         if not isinstance(self.imitate, str):
             raise InvalidArgumentError(f"imitate must be a method's name; got {self.imitate!r}")
+        if self.algorithm == "clone" and not self.imitate:
+            raise InvalidArgumentError("a clone needs the method it imitates (imitate, "
+                                       "--imitate METHOD)")  # fmt: skip
         if self.imitate:
-            if self.algorithm != "ppo" or self.task != "navigation" or len(self.levels) != 1:
+            if self.algorithm not in ("ppo", "clone") or self.task != "navigation" \
+                    or len(self.levels) != 1:  # fmt: skip
                 raise InvalidArgumentError(
-                    "imitate needs PPO on navigation episodes at one level; got "
+                    "imitate needs PPO or a clone on navigation episodes at one level; got "
                     f"{self.algorithm} on {self.task} at {', '.join(self.levels)}"
                 )
             for key in ("imitation_episodes", "imitation_epochs"):
@@ -214,7 +223,9 @@ class TrainConfig:
         SAC run's without PPO's."""
         d = dataclasses.asdict(self)
         d["net"] = list(self.net)
-        for key in ("algorithm", *_SAC_ONLY) if self.algorithm == "ppo" else _PPO_ONLY:
+        drop = {"ppo": ("algorithm", *_SAC_ONLY), "sac": _PPO_ONLY,
+                "clone": (*_PPO_ONLY, *_SAC_ONLY, *_NOT_CLONE)}[self.algorithm]  # fmt: skip
+        for key in drop:
             del d[key]
         if not self.imitate:  # as it was before the warm start came
             for key in _IMITATION:

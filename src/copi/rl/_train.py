@@ -164,6 +164,12 @@ def train(
         from copi.rl._imitate import check_demonstrator
 
         check_demonstrator(config.imitate, config.levels[0])
+    if config.algorithm == "clone":
+        if checkpoints is not None:
+            raise InvalidArgumentError("a clone takes no checkpoints (its rounds are minutes; "
+                                       "rerun it)")  # fmt: skip
+        return _train_clone(config, Path(output), validation_episodes=validation_episodes,
+                            command=command, keep=keep, imitating=imitating)  # fmt: skip
     import torch
     from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.callbacks import BaseCallback
@@ -324,6 +330,46 @@ def train(
     save_policy(policy, out)
     write_text(curve_path, json.dumps(summary, indent=1) + "\n", "json")
     _curve_figure(curve, figure_path, title=out.stem)
+    return summary
+
+
+def _train_clone(config: TrainConfig, out: Path, *, validation_episodes: int, command: str,
+                 keep: str, imitating: Callable[[str, int, int], None] | None
+                 ) -> dict[str, Any]:  # fmt: skip
+    """:func:`train` of a clone (:func:`copi.rl._imitate.train_clone`): the policy, its
+    curve over DAgger's rounds (.json, .png) and the summary."""
+    import torch
+
+    from copi.rl._imitate import train_clone
+
+    torch.set_num_threads(1)
+    curve_path, figure_path = _beside(out)
+    t0 = time.perf_counter()
+    info = {**config.identity(), "algorithm": "behaviour cloning (DAgger)", "command": command}
+    try:
+        policy, curve, imitation = train_clone(
+            config, lambda p: validation_success(p, config, validation_episodes),
+            imitating=imitating, info=info, keep=keep,
+        )  # fmt: skip
+    except BaseException as exc:
+        if not _ctrl_c_behind(exc):
+            raise
+        raise Interrupted("nothing saved (a clone's rounds are not checkpointed); rerun the "
+                          "same command") from None  # fmt: skip
+    seconds = round(time.perf_counter() - t0, 1)
+    policy.info["seconds"] = seconds
+    states = imitation["states"]
+    summary = {
+        "steps": 0, "states": states, "seconds": seconds, "steps_per_second": 0.0,
+        "curve": curve, "validation_episodes": validation_episodes,
+        "config": config.identity(), "command": command, "imitation": imitation,
+        "kept_steps": 0, "kept_round": policy.info["kept_round"],
+        "kept_success": policy.info["validation_success"],
+    }  # fmt: skip
+    save_policy(policy, out)
+    write_text(curve_path, json.dumps(summary, indent=1) + "\n", "json")
+    _curve_figure(curve, figure_path, title=out.stem,
+                  xlabel="states demonstrated (one point a DAgger round)")  # fmt: skip
     return summary
 
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from importlib.metadata import PackageNotFoundError, version
 
+import copi._kernel_cache  # noqa: F401  (first: the kernels' on-disk cache, see there)
 from copi.envs.registration import register_envs
 
 try:

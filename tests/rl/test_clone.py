@@ -43,7 +43,7 @@ def _compass(seed: int, hidden: int = 16, level: str = "map") -> PolicyWeights:
 
 
 @settings(max_examples=25, deadline=None)
-@given(seed=st.integers(0, 10_000), reach=st.floats(0.0, 1.0))
+@given(seed=st.integers(0, 10_000), reach=st.floats(0.0, 1.0, allow_subnormal=False))
 def test_a_compass_policy_takes_its_best_move_one_at_a_time_or_in_a_batch(seed: int,
                                                                         reach: float) -> None:  # fmt: skip
     """The numpy decision is the argmax of the scores (the same one by one and batched):
@@ -69,7 +69,7 @@ def test_a_compass_policy_takes_its_best_move_one_at_a_time_or_in_a_batch(seed: 
         along = math.cos(a) * r[-3] + math.sin(a) * r[-2]
         want = 1.0 if d >= 1.0 else max(along * d, 0.5 * d)
         assert math.hypot(*v) == pytest.approx(want, abs=1e-12)
-        if want > 0:
+        if want > 1e-9:  # its direction (a step of nothing has none to speak of)
             assert np.allclose(v / want, [math.cos(a), math.sin(a)], atol=1e-9)
 
 

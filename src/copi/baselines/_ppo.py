@@ -325,22 +325,23 @@ class PolicyWeights:
                              f"expected; got {x.shape}")  # fmt: skip
         out = np.empty(self.outputs)
         _forward(self._flat, self._shapes, x, self._buf, out,  # type: ignore[attr-defined]
-                 ("clip", "tanh", "compass").index(self.output))  # fmt: skip
+                 OUTPUTS.index(self.output))  # fmt: skip
         if self.output == "compass":
             return compass_move(out, x, self.n_rays, self.max_range)
         return out
 
     def act_batch(self, x: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Velocities for observations (B, 2 N + 3) at once, shape (B, 2)."""
+        """Velocities for observations (B, 2 N + 3) at once, shape (B, 2). A ``compass``
+        policy's, one at a time by :meth:`act`: its choice is an argmax, which the fixed
+        order of :meth:`act`'s sums keeps the same on every processor (a BLAS product's
+        order is its own)."""
+        if self.output == "compass":
+            return np.array([self.act(r) for r in np.asarray(x, dtype=np.float64)]).reshape(-1, 2)
         h = np.asarray(x, dtype=np.float64)
         for i, (w, b) in enumerate(self.layers):
             h = h @ w.T + b
             if i < len(self.layers) - 1:
                 np.tanh(h, out=h)
-        if self.output == "compass":
-            x = np.asarray(x, dtype=np.float64)
-            return np.array([compass_move(v, r, self.n_rays, self.max_range)
-                             for v, r in zip(h, x, strict=True)]).reshape(-1, 2)  # fmt: skip
         if self.output == "tanh":
             np.tanh(h, out=h)
         else:

@@ -1,17 +1,23 @@
 # copi: `make run` reproduces, `make test` checks, `make bench` measures.
 # Each target creates .venv and installs copi with what it needs on first use; later runs
 # reuse it (the install is redone only when pyproject.toml changes). The install ends by
-# compiling copi's numba kernels once (about 30 s), so that no later command waits for them.
+# compiling copi's numba kernels once (about 30 s), and again whenever a file that holds
+# kernels changes, so that no later command waits for them.
 
 PYTHON ?= $(shell command -v python3.11 2>/dev/null || command -v python3)
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.install-stamp
+KERNELS := $(VENV)/.kernels-stamp
+# Every source file that holds numba kernels: copi stamps their on-disk cache with all of
+# them (copi._kernel_cache), so a change to any one recompiles them all; it is done here,
+# once, not inside the first command or test that needs them.
+KERNEL_SOURCES := $(shell grep -rl njit src/copi --include='*.py' 2>/dev/null)
 RESULTS ?= results
 
 .PHONY: install run test lint typecheck pytest docs bench clean shell
 
-install: $(STAMP)
+install: $(KERNELS)
 
 $(STAMP): pyproject.toml
 	@test -n "$(PYTHON)" || { echo "make: need Python >= 3.11 (python3.11 or python3)"; exit 2; }
@@ -26,8 +32,11 @@ $(STAMP): pyproject.toml
 		$(BIN)/python -m pip install --quiet 'torch==2.13.0' && \
 		$(BIN)/python -m pip install --quiet -e '.[dev,peers,rl]') || \
 		echo "make: no CPU build of torch here: RL training (copi rl train) is left out"
-	$(BIN)/python -m copi._warmup
 	touch $(STAMP)
+
+$(KERNELS): $(STAMP) $(KERNEL_SOURCES)
+	$(BIN)/python -m copi._warmup
+	touch $(KERNELS)
 
 # The paper's Experiment 1 end to end (learn, 1549 dynamic worlds in two modes, report),
 # then the figures of the capabilities and a few worlds with an animation.

@@ -221,15 +221,23 @@ def _shipped(name: str) -> tuple[dict, str]:
     return info, f"{info['steps']:,} in {info['seconds'] / 60:.0f} min" if info else "—"
 
 
+def _arms_at_map(succ: dict, fam: str, *peers: str) -> dict[str, dict[int, bool]] | None:
+    """Each episode's success at map in family ``fam`` of ``peers`` and of the methods every
+    peer's section stands beside (straight, compass-guard, copi-predictive); None when one
+    of them did not run there."""
+    arms = {k: succ.get((fam, k, "map")) for k in (*peers, "straight", "compass-guard",
+                                                    "copi-predictive")}  # fmt: skip
+    return None if any(v is None for v in arms.values()) else arms  # type: ignore[return-value]
+
+
 def sac_lines(succ: dict, rate: dict) -> list[str]:
     """The second algorithm's section: SAC beside PPO on the same observation, both beside
     straight, compass-guard and copi-predictive, on the same episodes."""
     rows = []
     for fam in SAC_FAMILIES:
         sac, ppo = f"sac-{fam}-map", f"ppo-{fam}-map"
-        arms = {k: succ.get((fam, k, "map")) for k in (sac, ppo, "straight", "compass-guard",
-                                                         "copi-predictive")}  # fmt: skip
-        if any(v is None for v in arms.values()):
+        arms = _arms_at_map(succ, fam, sac, ppo)
+        if arms is None:
             continue
         _, took = _shipped(sac)
         ok = _learnt(rate, fam, sac)
@@ -275,9 +283,8 @@ def il_lines(succ: dict, rate: dict) -> list[str]:
     rows, clones, above, below = [], [], [], []
     for fam in IL_FAMILIES:
         il, ppo = f"ppo-il-{fam}-map", f"ppo-{fam}-map"
-        arms = {k: succ.get((fam, k, "map")) for k in (il, ppo, "straight", "compass-guard",
-                                                        "copi-predictive")}  # fmt: skip
-        if any(v is None for v in arms.values()):
+        arms = _arms_at_map(succ, fam, il, ppo)
+        if arms is None:
             continue
         info, took = _shipped(il)
         rows.append(
@@ -347,9 +354,8 @@ def clone_lines(succ: dict, rate: dict) -> list[str]:
     rows, rounds = [], []
     for fam in CLONE_FAMILIES:
         cl, ppo, il = f"clone-{fam}-map", f"ppo-{fam}-map", f"ppo-il-{fam}-map"
-        arms = {k: succ.get((fam, k, "map")) for k in (cl, ppo, il, "straight",
-                                                        "compass-guard", "copi-predictive")}
-        if any(v is None for v in arms.values()):
+        arms = _arms_at_map(succ, fam, cl, ppo, il)
+        if arms is None:
             continue
         info, _ = _shipped(cl)
         took = f"{info['seconds'] / 60:.0f} min" if info else "—"

@@ -140,12 +140,23 @@ def clone(
     from ``seed``. Returns each pass's mean loss."""
     import torch
 
+    params = [*policy.mlp_extractor.policy_net.parameters(), *policy.action_net.parameters()]
+    return _fit(params, lambda xb, yb: torch.nn.functional.mse_loss(_actor_mean(policy, xb), yb),
+                x, np.clip(y, -1.0, 1.0), epochs=epochs, seed=seed, batch_size=batch_size,
+                learning_rate=learning_rate)  # fmt: skip
+
+
+def _fit(params: Any, loss_of: Callable[[Any, Any], Any], x: Any, target: Any, *, epochs: int,
+         seed: int, batch_size: int, learning_rate: float) -> list[float]:  # fmt: skip
+    """Minimise ``loss_of(x_batch, target_batch)`` over ``params`` by Adam, ``epochs``
+    passes over ``x`` in a shuffled order from ``seed``; each pass's mean loss."""
+    import torch
+
     if len(x) == 0:
         raise InvalidArgumentError("nothing to imitate: no demonstrations")
-    params = [*policy.mlp_extractor.policy_net.parameters(), *policy.action_net.parameters()]
     opt = torch.optim.Adam(params, lr=learning_rate)
     xt = torch.as_tensor(x)
-    yt = torch.as_tensor(np.clip(y, -1.0, 1.0))
+    tt = torch.as_tensor(target)
     gen = torch.Generator().manual_seed(int(seed))
     losses = []
     for _ in range(int(epochs)):
@@ -153,7 +164,7 @@ def clone(
         total = 0.0
         for i in range(0, len(xt), batch_size):
             idx = order[i : i + batch_size]
-            loss = torch.nn.functional.mse_loss(_actor_mean(policy, xt[idx]), yt[idx])
+            loss = loss_of(xt[idx], tt[idx])
             opt.zero_grad()
             loss.backward()
             opt.step()
@@ -162,28 +173,21 @@ def clone(
     return losses
 
 
-def warm_start(model: Any, config: Any, progress: Callable[[str, int, int], None] | None = None
-               ) -> dict[str, Any]:  # fmt: skip
-    """Clone ``config.imitate`` into PPO ``model``'s actor (:class:`copi.rl.TrainConfig`'s
-    imitation fields): its demonstrations, then ``dagger_rounds`` rounds of the clone
-    driving; ``progress(stage, done, total)`` after each episode. Returns what it did
-    (episodes, states, each round's success and final loss)."""
-    import torch
-
+def _demonstration_env(config: Any) -> LocalPolicyEnv:
+    """The environment of ``config``'s demonstrations, reset apart from the training
+    environments' seeds."""
     env = LocalPolicyEnv(config.families, levels=config.levels, reward=config.reward,
                          max_steps=config.max_steps, observation=config.observation,
                          frames=config.frames, episodes=config.episodes)  # fmt: skip
-    env.reset(seed=config.seed * 1000 + 999)  # apart from the training environments'
-    policy = model.policy
+    env.reset(seed=config.seed * 1000 + 999)
+    return env
 
-    def act(x: NDArray[np.float32]) -> NDArray[np.float64]:
-        with torch.no_grad():
-            mean = _actor_mean(policy, torch.as_tensor(x[None]))
-        return mean[0].numpy().astype(np.float64)
 
-    rounds: list[dict[str, float]] = []
-    xs: list[NDArray[np.float32]] = []
-    ys: list[NDArray[np.float32]] = []
+def _dagger(env: LocalPolicyEnv, config: Any, act: Callable[[NDArray[np.float32]], Any],
+            progress: Callable[[str, int, int], None] | None) -> Any:  # fmt: skip
+    """DAgger's rounds (see the module): for each, (round, episodes, observations, the
+    demonstrator's moves, the driver's success): the demonstrator drives the first,
+    ``act`` the later ones (half as many episodes); ``progress(stage, done, total)``."""
     for r in range(config.dagger_rounds + 1):
         episodes = config.imitation_episodes if r == 0 else max(1, config.imitation_episodes // 2)
         stage = f"imitation: {config.imitate} drives" if r == 0 else f"DAgger round {r}"
@@ -194,6 +198,29 @@ def warm_start(model: Any, config: Any, progress: Callable[[str, int, int], None
 
         x, y, success = demonstrate(env, config.imitate, episodes,
                                     act=None if r == 0 else act, progress=tick)  # fmt: skip
+        yield r, episodes, x, y, success
+
+
+def warm_start(model: Any, config: Any, progress: Callable[[str, int, int], None] | None = None
+               ) -> dict[str, Any]:  # fmt: skip
+    """Clone ``config.imitate`` into PPO ``model``'s actor (:class:`copi.rl.TrainConfig`'s
+    imitation fields): its demonstrations, then ``dagger_rounds`` rounds of the clone
+    driving; ``progress(stage, done, total)`` after each episode. Returns what it did
+    (episodes, states, each round's success and final loss)."""
+    import torch
+
+    env = _demonstration_env(config)
+    policy = model.policy
+
+    def act(x: NDArray[np.float32]) -> NDArray[np.float64]:
+        with torch.no_grad():
+            mean = _actor_mean(policy, torch.as_tensor(x[None]))
+        return mean[0].numpy().astype(np.float64)
+
+    rounds: list[dict[str, float]] = []
+    xs: list[NDArray[np.float32]] = []
+    ys: list[NDArray[np.float32]] = []
+    for r, episodes, x, y, success in _dagger(env, config, act, progress):
         xs.append(x)
         ys.append(y)
         losses = clone(policy, np.concatenate(xs), np.concatenate(ys),
@@ -230,25 +257,9 @@ def _fit_classes(net: Any, x: NDArray[np.float32], c: NDArray[np.int64], *, epoc
     mean loss."""
     import torch
 
-    if len(x) == 0:
-        raise InvalidArgumentError("nothing to imitate: no demonstrations")
-    opt = torch.optim.Adam(net.parameters(), lr=learning_rate)
-    xt = torch.as_tensor(x)
-    ct = torch.as_tensor(c)
-    gen = torch.Generator().manual_seed(int(seed))
-    losses = []
-    for _ in range(int(epochs)):
-        order = torch.randperm(len(xt), generator=gen)
-        total = 0.0
-        for i in range(0, len(xt), batch_size):
-            idx = order[i : i + batch_size]
-            loss = torch.nn.functional.cross_entropy(net(xt[idx]), ct[idx])
-            opt.zero_grad()
-            loss.backward()
-            opt.step()
-            total += loss.item() * len(idx)
-        losses.append(total / len(xt))
-    return losses
+    return _fit(net.parameters(), lambda xb, cb: torch.nn.functional.cross_entropy(net(xb), cb),
+                x, c, epochs=epochs, seed=seed, batch_size=batch_size,
+                learning_rate=learning_rate)  # fmt: skip
 
 
 def _export(net: Any, config: Any, n_rays: int, max_range: float,
@@ -285,10 +296,7 @@ def train_clone(
     import torch
 
     torch.manual_seed(config.seed)
-    env = LocalPolicyEnv(config.families, levels=config.levels, reward=config.reward,
-                         max_steps=config.max_steps, observation=config.observation,
-                         frames=config.frames, episodes=config.episodes)  # fmt: skip
-    env.reset(seed=config.seed * 1000 + 999)
+    env = _demonstration_env(config)
     sim = env.sim
     n, reach = sim.sensor.n_rays, sim.sensor.max_range
     widths = [int(np.prod(env.observation_space.shape or (0,))), *config.net]
@@ -308,16 +316,7 @@ def train_clone(
     curve: list[dict[str, float]] = []
     rounds: list[dict[str, float]] = []
     best: tuple[float, PolicyWeights] | None = None
-    for r in range(config.dagger_rounds + 1):
-        episodes = config.imitation_episodes if r == 0 else max(1, config.imitation_episodes // 2)
-        stage = f"imitation: {config.imitate} drives" if r == 0 else f"DAgger round {r}"
-
-        def tick(done: int, stage: str = stage, episodes: int = episodes) -> None:
-            if imitating is not None:
-                imitating(stage, done, episodes)
-
-        x, y, success = demonstrate(env, config.imitate, episodes,
-                                    act=None if r == 0 else act, progress=tick)  # fmt: skip
+    for r, episodes, x, y, success in _dagger(env, config, act, imitating):
         xs.append(x)
         cs.append(compass_classes(y, n))
         losses = _fit_classes(net, np.concatenate(xs), np.concatenate(cs),

@@ -223,3 +223,19 @@ def test_a_crowdnav_benchmark_reports_crowdnav_s_metrics(tmp_path: Path, capsys)
     cells = [c.strip() for c in row.strip("|").split("|")]
     rates = [float(c) for c in cells[3:6]]
     assert abs(sum(rates) - 1.0) < 1e-9 and 0.0 <= float(cells[7]) <= 1.0
+
+
+def test_crowdnav_s_metrics_of_a_method_that_never_arrives_say_so() -> None:
+    from types import SimpleNamespace
+
+    from copi.methods._arms import MethodRun
+    from copi.reports._benchmark import physical_metrics
+
+    never, once = MethodRun("straight", "map"), MethodRun("dwa", "map")
+    rows = {never: [SimpleNamespace(outcome="collision", steps=8, close_steps=2)] * 2,
+            once: [SimpleNamespace(outcome="success", steps=40, close_steps=0),
+                   SimpleNamespace(outcome="timeout", steps=96, close_steps=4)]}  # fmt: skip
+    lines = physical_metrics("circle-crossing", rows, [never, once])
+    assert "| straight | map | 2 | 0.00 | 1.00 | 0.00 | — | 0.250 |" in lines
+    assert "| dwa | map | 2 | 0.50 | 0.00 | 0.50 | 10.00 | 0.029 |" in lines
+    assert physical_metrics("star", rows, [never]) == []

@@ -254,7 +254,7 @@ def physical_metrics(family: str, rows: dict[MethodRun, list[Any]],
                      arms: list[MethodRun]) -> list[str]:  # fmt: skip
     """For a family in physical units (CrowdNav's scenarios): its rows in CrowdNav's
     metrics, as its papers report them (rates, not percentages; the navigation time in
-    seconds, over the successful episodes; the discomfort frequency, the share of all
+    seconds, over the successful episodes, "—" where none succeeded; the discomfort frequency, the share of all
     steps closer to a human than the discomfort distance). Nothing for other families."""
     try:
         own = family_spec(family).episode
@@ -279,8 +279,8 @@ def physical_metrics(family: str, rows: dict[MethodRun, list[Any]],
             f"| {sum(r.outcome == 'success' for r in rs) / n:.2f} "
             f"| {sum(r.outcome == 'collision' for r in rs) / n:.2f} "
             f"| {sum(r.outcome == 'timeout' for r in rs) / n:.2f} "
-            f"| {(sum(won) / len(won)) if won else float('nan'):.2f} "
-            f"| {close / steps if steps else float('nan'):.3f} |"
+            f"| {f'{sum(won) / len(won):.2f}' if won else '—'} "
+            f"| {f'{close / steps:.3f}' if steps else '—'} |"
         )
     return [*out, ""]
 

@@ -6,6 +6,7 @@
         --seeds 0 --install
     python studies/rl_train_all.py --peer il --steps 1000000 --seeds 0 --install
     python studies/rl_train_all.py --peer clone --seeds 0 --install
+    python studies/rl_train_all.py --peer curriculum --seeds 0 --install
 
 Two peers. The second (the default, ``--peer second``): one policy per family at level
 ``map``, seeing what that level gives (``copi-local-v3``: the hits the static map does
@@ -20,7 +21,8 @@ The third (``--peer sac``): the second's observation and reward, learnt by SAC
 (:data:`SAC`), policies ``sac-F-map``. The fourth (``--peer il``): the second's, warm-started
 by imitating compass-guard (:data:`IMITATION`), policies ``ppo-il-F-map``. The fifth
 (``--peer clone``): no RL, a classifier of compass-guard's moves (:data:`CLONE`), policies
-``clone-F-map``.
+``clone-F-map``. The sixth (``--peer curriculum``): the second's, its episodes growing
+from static worlds to crowds (:data:`CURRICULUM`).
 
 Each run is ``copi rl train`` with checkpoints, so an interrupted script resumes. The
 seed-0 policies are then copied into ``src/copi/data/rl`` by ``--install``, the other
@@ -59,10 +61,12 @@ FIRST = ["--observation", "copi-local-v2", "--levels", "sensor,map", "--frames",
          "--batch-size", "256", "--raw-reward"]
 """The first peer's settings apart from :data:`TUNING`'s (its defaults when it was
 trained)."""
-SECOND = {f"{f}-{lv}": ["--families", f, "--levels", lv] for lv in ("map", "sensor")
-          for f in FAMILIES}
+SECOND = {**{f"{f}-{lv}": ["--families", f, "--levels", lv] for lv in ("map", "sensor")
+             for f in FAMILIES},
+          "chauffeur-sensor": ["--task", "chauffeur", "--levels", "sensor"]}
 """The second peer's configurations: one policy per family and level (``F-map``, and
-``F-sensor``: the level that gives no static reading)."""
+``F-sensor``: the level that gives no static reading), and the chauffeur's evader at the
+game's level (``chauffeur-sensor``)."""
 TUNING_SECOND = {
     "default": [],
     "raw-reward": ["--raw-reward"],
@@ -94,6 +98,20 @@ each ray of the frame, or none), its 2,000 episodes then DAgger's two rounds, fr
 family's pool of 50,000 training episodes (from the pool of 1,000 PPO trains on, the clone
 remembered its episodes: docs/rl.md), 256-256 tanh layers; policies ``clone-F-map``.
 No RL steps and no checkpoints (minutes a family)."""
+CURRICULUM = {
+    "cur-crowd-map": ["--families", "crowd", "--levels", "map",
+                      "--curriculum", "star:400000,polygon:1000000"],
+    "curp-crowd-map": ["--families", "crowd", "--levels", "map",
+                       "--curriculum", "polygon:1000000"],
+}
+"""The curriculum (``--peer curriculum``): the second peer's training in crowds (copi rl
+train's defaults, 2M steps) whose episodes start in easier worlds: star worlds (an open
+star-shaped room, 10 to 15 discs at 0.6) to 400k steps, polygon worlds (polygonal
+obstacles, the same discs) to 1M, then crowds (the polygon worlds with 25 to 40 discs at
+0.8); or polygon worlds alone to 1M. The one of higher validation success (seed 1, the
+mean of the curve's last three points: 21.1 against 17.2 %) is the method
+``ppo-cur-crowd-map`` (:data:`CURRICULUM_KEPT`)."""
+CURRICULUM_KEPT = ["cur-crowd-map"]
 SAC = ["--algo", "sac", "--batch-size", "256"]
 """The SAC peer's settings beside copi rl train's defaults (8 environments, one gradient
 step after each step of them, a buffer of 100k transitions, 10k random steps first):
@@ -125,7 +143,7 @@ def main() -> None:
     ap.add_argument("--out", default="results/rl")
     ap.add_argument("--only", default=None, help="comma-separated configurations")
     ap.add_argument("--tune", action="store_true", help="the settings (seed 0)")
-    ap.add_argument("--peer", choices=("first", "second", "sac", "il", "clone"),
+    ap.add_argument("--peer", choices=("first", "second", "sac", "il", "clone", "curriculum"),
                     default="second")  # fmt: skip
     # chosen by --tune (400k steps on the mix, validation seed 1: the highest mean of the
     # last three points of the learning curve; docs/rl.md has the table)
@@ -149,6 +167,10 @@ def main() -> None:
     elif a.peer == "il":
         names = a.only.split(",") if a.only else list(IMITATION)
         jobs = [(f"ppo-{name}-s{seed}", [*IMITATION[name], "--seed", seed])
+                for seed in a.seeds.split(",") for name in names]  # fmt: skip
+    elif a.peer == "curriculum":
+        names = a.only.split(",") if a.only else list(CURRICULUM)
+        jobs = [(f"ppo-{name}-s{seed}", [*CURRICULUM[name], "--seed", seed])
                 for seed in a.seeds.split(",") for name in names]  # fmt: skip
     elif a.peer == "clone":
         names = a.only.split(",") if a.only else list(CLONE)
@@ -175,8 +197,8 @@ def main() -> None:
         print(f"{name}: {r['steps']:,} steps, {r['seconds']:.0f} s ({r['steps_per_second']:,.0f}"
               f"/s), validation success {100 * last['success']:.1f} %")
     if a.install:
-        configs = {"first": list(CONFIGS), "il": list(IMITATION),
-                   "clone": list(CLONE)}.get(a.peer, list(SECOND))  # fmt: skip
+        configs = {"first": list(CONFIGS), "il": list(IMITATION), "clone": list(CLONE),
+                   "curriculum": CURRICULUM_KEPT}.get(a.peer, list(SECOND))  # fmt: skip
         _install(out, configs, {"sac": "sac", "clone": "clone"}.get(a.peer, "ppo"))
 
 

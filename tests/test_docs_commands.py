@@ -96,6 +96,7 @@ def test_the_pages_hold_command_examples() -> None:
 SMALLER = {
     "--worlds": "2", "--episodes": "2", "--games": "2", "--tasks": "3", "--steps": "2048",
     "--probe-worlds": "4", "--probe-steps": "40", "--imitation-episodes": "4",
+    "--curriculum": "star:512,polygon:1024",
 }
 """Counts cut down for the run (a page's ``--worlds 1549`` runs 2 worlds)."""
 

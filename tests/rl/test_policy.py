@@ -216,6 +216,12 @@ def test_every_shipped_policy_loads_and_says_how_it_was_trained() -> None:
         cloned = " --imitate " in command
         assert f" --steps {2000000 if algo == 'ppo' and not cloned else 1000000} " in command
         assert cloned == path.stem.startswith("ppo-il-")
+        # a curriculum's stages are in the command and in the run's identity alike
+        staged = path.stem.startswith("ppo-cur-")
+        assert (" --curriculum " in command) == staged == ("curriculum" in policy.info)
+        if staged:
+            stages = ",".join(f"{f}:{end}" for f, end in policy.info["curriculum"])
+            assert f" --curriculum {stages} " in command
         if path.parent.name == "seeds":
             seed = path.stem.rsplit("-s", 1)[1]
             assert command.endswith(f"--seed {seed}") and seed != "0"

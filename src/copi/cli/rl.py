@@ -116,6 +116,11 @@ def train_command(
         int, typer.Option("--dagger-rounds", min=0, max=100,
                           help="Rounds of the clone driving, the demonstrator labelling.")
     ] = 2,
+    curriculum: Annotated[
+        str, typer.Option("--curriculum", help="PPO or SAC: stages before --families, "
+                          "FAMILY:STEP each (the step it ends at), e.g. "
+                          "star:400000,polygon:800000 (then --families to the end).")
+    ] = "",
 ) -> None:
     """Train PPO or SAC (Stable-Baselines3) for a local policy in copi's factorisation: it sees
     its level's reading (at map, the hits the static map does not explain), the last
@@ -145,6 +150,7 @@ def train_command(
         n_steps=n_steps, batch_size=batch_size, algorithm=algo, buffer_size=buffer_size,
         learning_starts=learning_starts, gradient_steps=gradient_steps, imitate=imitate,
         imitation_episodes=imitation_episodes, dagger_rounds=dagger_rounds, episodes=episodes,
+        curriculum=_stages(curriculum),
     )  # fmt: skip
     if imitate:
         check_demonstrator(imitate, config.levels[0])
@@ -192,6 +198,24 @@ def train_command(
         f"{100 * summary['curve'][-1]['success']:.1f} % at the end; kept: the policy of "
         f"{summary['kept_steps']:,} steps ({100 * summary['kept_success']:.1f} %)"
     )
+
+
+def _stages(text: str) -> tuple[tuple[str, int], ...]:
+    """--curriculum's FAMILY:STEP,... as TrainConfig's stages."""
+    from copi.errors import InvalidArgumentError
+
+    stages = []
+    for part in (p.strip() for p in text.split(",") if p.strip()):
+        family, _, end = part.rpartition(":")
+        try:
+            stages.append((family.strip(), int(end)))
+        except ValueError:
+            raise InvalidArgumentError(f"--curriculum must be FAMILY:STEP stages, e.g. "
+                                       f"star:400000,polygon:800000; got {part!r}") from None
+        if not family.strip():
+            raise InvalidArgumentError(f"--curriculum must be FAMILY:STEP stages, e.g. "
+                                       f"star:400000,polygon:800000; got {part!r}")
+    return tuple(stages)
 
 
 @rl_app.command("sarl")

@@ -112,7 +112,7 @@ class LocalPolicyEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         Names of registered world families (at least one; episodes of the training seed).
     levels : tuple of str
         Sensing levels to draw from, each "sensor" or "map" (at least one; the chauffeur
-        task runs at "map" whatever they are).
+        task runs at "map" whatever they are, but for a ``copi-local-v3`` evader).
     task : str
         "navigation" or "chauffeur" (the evader of the homicidal chauffeur).
     reward : Reward, optional
@@ -164,7 +164,10 @@ class LocalPolicyEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
             check_sensing(lv)
             if lv not in ("sensor", "map"):
                 raise InvalidArgumentError(f"a local policy runs at sensor or map, not {lv}")
-        self.levels = levels if task == "navigation" else ("map",)
+        # the first peer's chauffeur ran at map whatever the levels said (its features are
+        # the same at every level); a copi-local-v3 evader runs at the level it is given
+        self.levels = levels if task == "navigation" or observation == OBSERVATION_V3 \
+            else ("map",)  # fmt: skip
         self.task = task
         if reward is not None and not isinstance(reward, Reward):
             raise InvalidArgumentError("reward must be a copi.envs.local_policy.Reward or None; "
@@ -273,6 +276,7 @@ class LocalPolicyEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         # what replays this episode (state): the generator as the episode is drawn, and
         # every action since
         self._drawn_from = copy.deepcopy(self.np_random.bit_generator.state)
+        self._drawn_families = self.families  # a curriculum changes them between episodes
         self._actions: list[NDArray[np.float64]] = []
         self._prev = None
         self._history = []
@@ -284,27 +288,39 @@ class LocalPolicyEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
 
     def state(self) -> dict[str, Any]:
         """What brings a fresh environment to this one's state (:meth:`restore`): the
-        random generator as this episode was drawn (JSON-able) and the actions taken
+        random generator as this episode was drawn (JSON-able), the families it was drawn
+        from (a curriculum's stage may since have changed them) and the actions taken
         since, shape (t, 2). The simulator is deterministic, so replaying them rebuilds
         everything else; nothing is pickled."""
         if self._ended == "not started":
             raise InvalidArgumentError("the environment has not been reset: no state")
         actions = np.array(self._actions, dtype=np.float64).reshape(-1, 2)
-        return {"drawn_from": self._drawn_from, "actions": actions, "ended": self._ended}
+        return {"drawn_from": self._drawn_from, "actions": actions, "ended": self._ended,
+                "drawn_families": list(self._drawn_families)}  # fmt: skip
 
     def restore(self, state: dict[str, Any]) -> NDArray[np.float32]:
         """Bring this environment to ``state`` (:meth:`state`) by drawing the same episode
-        and replaying its actions; returns the observation there."""
+        and replaying its actions; returns the observation there. The families of later
+        episodes stay this environment's (a state without ``drawn_families``, from before
+        curricula came, was drawn from them too)."""
         try:
             self.np_random = np.random.default_rng()
             self.np_random.bit_generator.state = state["drawn_from"]
             actions = np.asarray(state["actions"], dtype=np.float64).reshape(-1, 2)
+            drawn = state.get("drawn_families")
+            drawn = self.families if drawn is None else _names(drawn, "families", "family")
+            for f in drawn:
+                check_family(f)
         except (KeyError, TypeError, ValueError) as exc:
             raise InvalidArgumentError(f"not an environment's state ({exc})") from None
         if len(actions) > self.max_steps or not np.isfinite(actions).all():
             raise InvalidArgumentError("not an environment's state (its actions are not "
                                        "an episode's)")  # fmt: skip
-        obs, _ = self.reset()
+        families, self.families = self.families, drawn
+        try:
+            obs, _ = self.reset()
+        finally:
+            self.families = families
         for a in actions:
             obs, *_ = self.step(a)
         self._ended = state.get("ended")

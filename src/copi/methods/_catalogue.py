@@ -79,6 +79,14 @@ _RL_POLICIES = [
        "the 32 rays of its frame, or none; no RL): the network decides alone, the step's "
        "length near the goal is compass-guard's rule (hand-written)")
       for f in ("star", "polygon", "indoor", "maps", "crowd")],
+    # the second peer trained for the game, at the game's level (docs/rl.md)
+    ("ppo-chauffeur-sensor", "ppo-chauffeur-sensor", 0.0, "PPO trained as the evader of the "
+     "homicidal chauffeur at the game's level, seeing what ppo-F-sensor sees (the reading, "
+     "three stacked, its own velocity) under the game's direction; nothing hand-written"),
+    # the curriculum (docs/rl.md): ppo-crowd-map's training from easier worlds to crowds
+    ("ppo-cur-crowd-map", "ppo-cur-crowd-map", 0.0, "ppo-crowd-map's training with a "
+     "curriculum: its episodes in star worlds to 400k steps, polygon worlds to 1M, then "
+     "crowds; nothing hand-written"),
 ]  # fmt: skip
 
 

@@ -254,8 +254,9 @@ def physical_metrics(family: str, rows: dict[MethodRun, list[Any]],
                      arms: list[MethodRun]) -> list[str]:  # fmt: skip
     """For a family in physical units (CrowdNav's scenarios): its rows in CrowdNav's
     metrics, as its papers report them (rates, not percentages; the navigation time in
-    seconds, over the successful episodes, "—" where none succeeded; the discomfort frequency, the share of all
-    steps closer to a human than the discomfort distance). Nothing for other families."""
+    seconds, over the successful episodes, "—" where none succeeded; the discomfort
+    frequency, the share of all steps closer to a human than the discomfort distance).
+    Nothing for other families."""
     try:
         own = family_spec(family).episode
     except CopiError:  # a family of another package, not installed here

@@ -117,7 +117,8 @@ def _write_checkpoint(ckpt: Path, model: Any, vec: Any, config: TrainConfig,
         "updates": int(model._n_updates), "curve": curve, "seconds": seconds,
         "numpy_rng": [kind, np.asarray(key).tolist(), int(pos), int(has_gauss), float(cached)],
         "python_rng": json.loads(json.dumps(random.getstate())),
-        "envs": [{"drawn_from": s["drawn_from"], "ended": s["ended"]} for s in envs],
+        "envs": [{"drawn_from": s["drawn_from"], "ended": s["ended"],
+                  "drawn_families": s["drawn_families"]} for s in envs],
         "last_pt_sha256": hashlib.sha256(data).hexdigest(),
     }
     if config.algorithm == "sac":  # where the buffer writes next; the warm-up's generator
@@ -409,7 +410,8 @@ def _restore(model: Any, vec: Any, saved: dict[str, Any], ckpt: Path,
         obs = np.stack([
             env.restore({"drawn_from": meta["envs"][i]["drawn_from"],
                          "actions": tensors[f"actions{i}"].numpy(),
-                         "ended": meta["envs"][i].get("ended")})
+                         "ended": meta["envs"][i].get("ended"),
+                         "drawn_families": meta["envs"][i].get("drawn_families")})
             for i, env in enumerate(vec.envs)
         ])  # fmt: skip
         kind, key, pos, has_gauss, cached = meta["numpy_rng"]

@@ -102,6 +102,12 @@ class TrainConfig:
     """Rounds of DAgger after the first."""
     imitation_epochs: int = 30
     """Passes over the demonstrations at each round."""
+    curriculum: tuple[tuple[str, int], ...] = ()
+    """PPO or SAC: stages before ``families``, each (a family, the step it ends at), in
+    order: the episodes are the first stage's family until its step, then the next's, and
+    from the last stage's step to the end ``families``' (a curriculum, e.g. static star
+    worlds, then polygon worlds with a few moving obstacles, then crowds). Validation is
+    on ``families`` throughout: the curve shows the target's success. () none."""
 
     def __post_init__(self) -> None:
         if self.algorithm not in ALGORITHMS:
@@ -177,13 +183,14 @@ class TrainConfig:
         if not isinstance(self.normalize_reward, bool):
             raise InvalidArgumentError("normalize_reward must be True or False; got "
                                        f"{self.normalize_reward!r}")  # fmt: skip
-        # the chauffeur's evader is learnt at map whatever the levels say
+        # the first peer's chauffeur evader was learnt at map whatever the levels said
         check_layout(self.observation, self.frames,
-                     self.levels if self.task == "navigation" else None)  # fmt: skip
+                     self.levels if self.task == "navigation" or self.observation == OBSERVATION_V3
+                     else None)  # fmt: skip
         if self.algorithm == "sac":
             from copi.baselines import observation_size
 
-            level = "map" if self.task == "chauffeur" else self.levels[0]
+            level = self.levels[0]  # the first peer's size is the same at every level
             # the observations twice (this one and the next) in float32, and the rest
             per = 8 * observation_size(32, self.observation, level, self.frames) + 64
             if per * self.buffer_size > _CHECKPOINT_BYTES * 0.9:
@@ -196,6 +203,39 @@ class TrainConfig:
         if not self.families or not self.levels:
             raise InvalidArgumentError("families and levels must each name at least one; got "
                                        f"families {self.families!r}, levels {self.levels!r}")
+        self._check_curriculum()
+
+    def _check_curriculum(self) -> None:
+        if not self.curriculum:
+            return
+        if self.algorithm == "clone" or self.imitate or self.task != "navigation":
+            raise InvalidArgumentError(
+                "a curriculum needs PPO or SAC on navigation episodes without --imitate; got "
+                f"{self.algorithm}{' imitating ' + self.imitate if self.imitate else ''} on "
+                f"{self.task}"
+            )
+        last = 0
+        for stage in self.curriculum:
+            if not (isinstance(stage, tuple) and len(stage) == 2 and isinstance(stage[0], str)
+                    and isinstance(stage[1], int) and not isinstance(stage[1], bool)):
+                raise InvalidArgumentError("a curriculum's stage must be (family, the step it "
+                                           f"ends at); got {stage!r}")  # fmt: skip
+            check_family(stage[0])
+            if not last < stage[1] < self.steps:
+                raise InvalidArgumentError(
+                    f"a curriculum's stages must end at increasing steps, each above the "
+                    f"last ({last:,}) and below steps ({self.steps:,}); got {stage[1]:,} "
+                    f"for {stage[0]}"
+                )
+            last = stage[1]
+
+    def families_at(self, steps: int) -> tuple[str, ...]:
+        """The families of the training episodes after ``steps`` environment steps (the
+        curriculum's stage, or ``families`` past it)."""
+        for family, end in self.curriculum:
+            if steps < end:
+                return (family,)
+        return self.families
 
     @property
     def rollout(self) -> int:
@@ -232,6 +272,10 @@ class TrainConfig:
                 del d[key]
         if self.episodes == EPISODES_PER_FAMILY:  # as it was before the pool could be chosen
             del d["episodes"]
+        if self.curriculum:
+            d["curriculum"] = [list(stage) for stage in self.curriculum]
+        else:  # as it was before curricula came
+            del d["curriculum"]
         return d
 
 

@@ -100,9 +100,9 @@ def export_policy(model: Any, n_rays: int = 32, max_range: float = 10.0,
     output = "tanh" if sac else "clip"
     if config is None or config.observation == OBSERVATION:
         return PolicyWeights(tuple(layers), n_rays, max_range, info or {}, output=output)
-    level = "map" if config.task == "chauffeur" else config.levels[0]
+    # one level (a copi-local-v3 policy's, a chauffeur's evader too)
     return PolicyWeights(tuple(layers), n_rays, max_range, info or {}, config.observation,
-                         level, config.frames, output)  # fmt: skip
+                         config.levels[0], config.frames, output)  # fmt: skip
 
 
 def validation_success(
@@ -181,7 +181,7 @@ def train(
 
     def make(i: int) -> Callable[[], LocalPolicyEnv]:
         def env() -> LocalPolicyEnv:
-            e = LocalPolicyEnv(config.families, levels=config.levels, task=config.task,
+            e = LocalPolicyEnv(config.families_at(0), levels=config.levels, task=config.task,
                                reward=config.reward, max_steps=config.max_steps,
                                observation=config.observation, frames=config.frames,
                                episodes=config.episodes)  # fmt: skip
@@ -232,6 +232,16 @@ def train(
                 best = load_policy(ckpt / "best.npz")
             if resumed is not None:
                 resumed(int(model.num_timesteps))
+    stage = [config.families_at(0)]
+
+    def follow_curriculum() -> None:
+        """The training episodes' families for the steps done (a curriculum's stage)."""
+        now = config.families_at(int(model.num_timesteps))
+        if now != stage[0]:
+            vec.set_attr("families", now)
+            stage[0] = now
+
+    follow_curriculum()  # a resumed run goes on in its stage
     t0 = time.perf_counter()
     imitation: dict[str, Any] = {}
     if config.imitate and saved is None:  # a resumed run has its clone in its checkpoint
@@ -262,6 +272,7 @@ def train(
             return True
 
         def _on_rollout_start(self) -> None:
+            follow_curriculum()
             if model.num_timesteps >= self.next:
                 self.next = (model.num_timesteps // validate_every + 1) * validate_every
                 record()

@@ -181,7 +181,8 @@ def lean_like_lines(bench: Path, episodes: int, workers: int, figure_path: Path)
         alone.append(
             f"| {fam} | {_pct(rate['straight'])} | {_pct(rate['compass-guard'])} | "
             f"{_pct(rate['copi-predictive'])} | {_pct(rate[peer])} | {d} | {better} | "
-            f"{_pct(copi_val[peer])} | {_pct(info['curve'][-1]['success'])} | "
+            f"{_pct(copi_val[peer])} | {_pct(info['kept_success'])} at "
+            f"{info['kept_steps'] / 1e6:.1f}M / {_pct(info['curve'][-1]['success'])} | "
             f"{f'{cross:,} steps' if cross is not None else 'not within its 2M steps'} |"
         )
         d, better = _delta(won["copi-learnt"], won[shield], "copi-learnt (1/100)", shield)
@@ -210,14 +211,15 @@ def lean_like_lines(bench: Path, episodes: int, workers: int, figure_path: Path)
         "",
         "| family | straight | compass-guard | copi-predictive (1/100) | ppo-F-map (2M) | "
         "Δ copi-predictive − ppo-F-map | better | copi-predictive (1/100), validation | "
-        "ppo-F-map, validation at the end | ppo-F-map first reaches copi at |",
+        "ppo-F-map, validation: kept / at the end | ppo-F-map first reaches copi at |",
         "|---|---|---|---|---|---|---|---|---|---|",
         *alone,
         "",
         f"copi-predictive at 1/100 ahead of ppo-F-map (interval above 0) in {ahead_alone} of "
         "5 families. The last three columns: success on each PPO run's own validation "
-        "episodes (seed 1, 60 of its family), and the first point of its learning curve "
-        "(every 100k steps) at or above copi's there.",
+        "episodes (seed 1, 60 of its family; the policy kept, and shipped, is the curve's "
+        "best point, which flatters it, as the best of twenty noisy points), and the first "
+        "point of its learning curve (every 100k steps) at or above copi's there.",
         "",
         "Guarded (compass-guard's hand-written guard filters both):",
         "",

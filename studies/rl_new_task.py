@@ -27,6 +27,8 @@ from copi.experiments import PursuitConfig, ensure_capabilities, pursue  # noqa:
 from copi.methods import method_names, method_spec  # noqa: E402
 from copi.results import ResultsStore, paired_difference  # noqa: E402
 
+FIGURE = "rl-curve-chauffeur-sensor.png"
+"""The learning curve of the second peer trained for the game (validation survival)."""
 SECTION = "## A new task for the second peer: the chauffeur's evader (level sensor)"
 AFTER = "## A new task: the homicidal chauffeur's evader"
 PEERS = tuple(m for m in ("ppo-star-sensor", "ppo-crowd-sensor", "ppo-chauffeur-sensor")
@@ -102,6 +104,8 @@ def lines(bench: Path, games: int) -> list[str]:
          "%, and no copi method without the guard plays the game (copi-predictive needs the "
          "map)." if best else "No second-peer policy at level sensor is shipped."),
         "",
+        *([f"![ppo-chauffeur-sensor]({FIGURE})", ""] if game_peer
+          and (Path(__file__).resolve().parents[1] / "docs" / FIGURE).is_file() else []),
     ]
 
 

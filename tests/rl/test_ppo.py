@@ -205,3 +205,24 @@ def test_the_v3_env_shows_what_the_v3_agent_sees(level: str) -> None:
         obs, _, done, cut, _ = env.step(a)
         if done or cut:
             break
+
+
+def test_a_v3_evader_learns_at_the_level_it_is_given() -> None:
+    """The game gives its evader level sensor: a copi-local-v3 evader is trained at the
+    level it is told (its observation that level's), the first peer's at map whatever."""
+    from copi.baselines import OBSERVATION_V3, observation_size
+    from copi.envs.local_policy import LocalPolicyEnv
+    from copi.rl import TrainConfig
+
+    for level in ("sensor", "map"):
+        env = LocalPolicyEnv(task="chauffeur", levels=(level,), observation=OBSERVATION_V3,
+                             frames=3)  # fmt: skip
+        obs, _ = env.reset(seed=0)
+        assert env.level == level
+        assert obs.shape == (observation_size(32, OBSERVATION_V3, level, 3),)
+    assert observation_size(32, OBSERVATION_V3, "sensor", 3) < observation_size(
+        32, OBSERVATION_V3, "map", 3)  # map adds the hits the static map does not explain
+    assert LocalPolicyEnv(task="chauffeur", levels=("sensor", "map")).levels == ("map",)
+    assert TrainConfig(task="chauffeur", levels=("sensor",)).levels == ("sensor",)
+    with pytest.raises(InvalidArgumentError, match="one level"):
+        TrainConfig(task="chauffeur", levels=("sensor", "map"))

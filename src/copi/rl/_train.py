@@ -340,7 +340,8 @@ def train(
     summary["kept_success"] = policy.info["validation_success"]
     save_policy(policy, out)
     write_text(curve_path, json.dumps(summary, indent=1) + "\n", "json")
-    _curve_figure(curve, figure_path, title=out.stem)
+    _curve_figure(curve, figure_path, title=out.stem, stages=config.curriculum,
+                  target=",".join(config.families))  # fmt: skip
     return summary
 
 
@@ -412,9 +413,21 @@ def _what_is_saved(config: TrainConfig, ckpt: Path | None, checkpointed: int,
 
 
 def _curve_figure(curve: list[dict[str, float]], path: Path, *, title: str,
-                  xlabel: str = "environment steps") -> None:  # fmt: skip
+                  xlabel: str = "environment steps",
+                  stages: tuple[tuple[str, int], ...] = (), target: str = "") -> None:  # fmt: skip
+    """The learning curve; a curriculum's stages shaded, each named by its family, and
+    the ``target`` families' part after them named too."""
     fig = new_figure(5.0, 3.4)
     ax = fig.add_subplot()
+    start = 0
+    for i, (family, end) in enumerate(stages):
+        ax.axvspan(start, end, color="0.85" if i % 2 == 0 else "0.93", lw=0, zorder=0)
+        ax.text((start + end) / 2, 0.98, family, transform=ax.get_xaxis_transform(),
+                ha="center", va="top", fontsize=7, color="0.35")  # fmt: skip
+        start = end
+    if stages and curve and curve[-1]["steps"] > start:
+        ax.text((start + curve[-1]["steps"]) / 2, 0.98, target, ha="center", va="top",
+                transform=ax.get_xaxis_transform(), fontsize=7, color="0.35")  # fmt: skip
     ax.plot([c["steps"] for c in curve], [100 * c["success"] for c in curve], marker="o", ms=3)
     ax.set_xlabel(xlabel)
     ax.set_ylabel("validation success (%)")

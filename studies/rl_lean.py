@@ -23,6 +23,7 @@ the section on the first peer's hundredth where there is none), and its figure b
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
 import math
 import sys
@@ -56,9 +57,14 @@ SECTION = "## copi at a hundredth of PPO's samples, like with like (level map)"
 NEXT = "## copi at a hundredth of PPO's samples (level map)"
 
 
+def _key(params: dict) -> str:
+    """A short digest of learning parameters: what is kept under it is theirs."""
+    return hashlib.sha256(json.dumps(params, sort_keys=True).encode()).hexdigest()[:8]
+
+
 def capabilities(bench: Path, name: str, params: dict) -> Path:
     """The capabilities learnt with ``params`` into ``bench`` (once; the seconds kept)."""
-    path = bench / f"capabilities-{name}.npz"
+    path = bench / f"capabilities-{name}-{_key(params)}.npz"
     if not path.is_file():
         t0 = time.perf_counter()
         learn(LearnParams(**params)).save(path)
@@ -108,7 +114,7 @@ def _pct(x: float) -> str:
 def validation(bench: Path, path: Path) -> dict[str, float]:
     """copi-predictive at 1/100 on each ``ppo-F-map``'s validation episodes (kept in
     ``bench``: a rerun does not replay them)."""
-    kept = bench / "validation.json"
+    kept = bench / f"validation-{path.stem}.json"  # by the capabilities' parameters
     done = json.loads(kept.read_text()) if kept.is_file() else {}
     caps = Capabilities.load(path)
     for fam in FAMILIES:
@@ -160,8 +166,7 @@ def lean_like_lines(bench: Path, episodes: int, workers: int, figure_path: Path)
     rows = run(bench, episodes, workers)
     took = time.perf_counter() - t0
     times = kept_times(bench / "timing.json", {"bench": (took, round(took))})
-    pred_path = bench / "capabilities-predictive.npz"
-    copi_val = validation(bench, pred_path)
+    copi_val = validation(bench, capabilities(bench, "predictive", LEAN_PREDICTIVE))
     curves = {f"ppo-{f}-map": json.loads(packaged_policy(f"ppo-{f}-map").with_suffix(".json")
                                          .read_text()) for f in FAMILIES}  # fmt: skip
     cost = {k: simulated_steps(LearnParams(**p))["total"]
@@ -204,7 +209,7 @@ def lean_like_lines(bench: Path, episodes: int, workers: int, figure_path: Path)
     return [
         SECTION,
         "",
-        f"`python studies/rl_lean.py --bench results/rl-lean --episodes {episodes}` "
+        f"`python studies/rl_lean.py --bench {bench} --episodes {episodes}` "
         f"({times['bench'] / 60:.0f} min, {workers} workers). copi learnt in star worlds alone, "
         "without any task, at about a hundredth of one second-peer run's "
         f"{ppo:,} environment steps: copi-predictive from `LearnParams({shown['predictive']})` "
@@ -213,10 +218,10 @@ def lean_like_lines(bench: Path, episodes: int, workers: int, figure_path: Path)
         f"({cost['learnt']:,}, 1/{ppo / cost['learnt']:.0f}; {learn_s['learnt']:.0f} s); "
         "the settings are fixed by that budget, not tuned. Beside the second peer, trained "
         "with the whole budget in each family itself (every family but star is a new world "
-        "for copi here, not for the peer). Learnt alone (no hand-written guard or rule about "
-        "obstacles at run time; copi-predictive's planner, a search over its moves checked "
-        "against the map's walls and the futures it drew, is an algorithm written by hand, "
-        "as SARL's one-step lookahead is, and what it plans over is learnt):",
+        "for copi here, not for the peer). Learnt alone (no hand-written guard on the live "
+        "reading; copi-predictive's planner, written by hand as SARL's one-step lookahead "
+        "is, checks its moves against the known map's walls and the futures its learnt "
+        "model drew):",
         "",
         "| family | straight | compass-guard | copi-predictive (1/100) | ppo-F-map (2M) | "
         "Δ copi-predictive − ppo-F-map | better | copi-predictive (1/100), validation | "

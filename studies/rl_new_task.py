@@ -82,7 +82,7 @@ def lines(bench: Path, games: int) -> list[str]:
     return [
         SECTION,
         "",
-        f"`python studies/rl_new_task.py --bench results/rl-game --games {games}`. The game "
+        f"`python studies/rl_new_task.py --bench {bench} --games {games}`. The game "
         "gives its evader a local reading and the game's direction, no map: level sensor, "
         "where the second peer was trained as `ppo-F-sensor` (the reading, three stacked, "
         "its own velocity, the goal's direction), played here unchanged under the game's "

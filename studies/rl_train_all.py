@@ -177,7 +177,9 @@ def main() -> None:
         jobs = [(f"clone-{name}-s{seed}", [*CLONE[name], "--seed", seed])
                 for seed in a.seeds.split(",") for name in names]  # fmt: skip
     elif second or a.peer == "sac":
-        names = a.only.split(",") if a.only else list(SECOND)
+        # SAC was trained for navigation only (its configurations named with --only)
+        names = a.only.split(",") if a.only else [n for n in SECOND
+                                                  if second or not n.startswith("chauffeur")]
         algo, extra = ("ppo", []) if second else ("sac", SAC)
         jobs = [(f"{algo}-{name}-s{seed}", [*SECOND[name], *extra, "--seed", seed])
                 for seed in a.seeds.split(",") for name in names]  # fmt: skip

@@ -5,6 +5,7 @@ in one line."""
 from __future__ import annotations
 
 import hashlib
+import json
 from pathlib import Path
 from typing import Any
 
@@ -29,6 +30,9 @@ def test_the_stages_name_the_families_of_each_step() -> None:
     assert c.identity()["curriculum"] == [["star", 384], ["polygon", 768]]
     assert "curriculum" not in _config(curriculum=()).identity()  # as before curricula
     assert _config(curriculum=()).families_at(0) == ("crowd",)
+    # the stages as a policy's info keeps them (lists) make the same config, hashable
+    listed = _config(curriculum=[["star", 384], ["polygon", 768]])
+    assert listed == c and hash(listed) == hash(c)
 
 
 @pytest.mark.parametrize(("kw", "message"), [
@@ -48,6 +52,7 @@ def test_bad_stages_are_refused(kw: dict[str, Any], message: str) -> None:
     ("star:x", "--curriculum must be FAMILY:STEP stages"),
     (":100", "--curriculum must be FAMILY:STEP stages"),
     ("star:300,polygon:200", "increasing steps"),
+    (" , ", "--curriculum must be FAMILY:STEP stages"),
 ])  # fmt: skip
 def test_bad_curricula_on_the_command_line_are_one_line(flag: str, message: str, tmp_path: Path,
                                                         capsys) -> None:  # fmt: skip
@@ -92,12 +97,17 @@ def test_the_episodes_follow_the_stages_and_a_resumed_run_its_stage(tmp_path: Pa
     assert last["polygon"] < first["crowd"] and kinds[-1] == "crowd"
 
     def stop(done: int, total: int) -> None:
-        if done >= 900:  # in the second stage's rollouts: the checkpoint of 768 is kept
+        if done >= 900:  # in the last stage (crowd, from 768): the checkpoint of 768 is kept
             raise KeyboardInterrupt
 
     with pytest.raises(Interrupted):
         train(_config(), tmp_path / "cut.npz", checkpoints=tmp_path / "ck", validate_every=384,
               validation_episodes=1, progress=stop)  # fmt: skip
+    saved = json.loads((tmp_path / "ck" / "last.json").read_text())["envs"]
+    # the episodes under way were drawn in the stage before (the crowd's began at 768)
+    assert {tuple(e["drawn_families"]) for e in saved} == {("polygon",)}
+    resumed: list[int] = []
     train(_config(), tmp_path / "cut.npz", checkpoints=tmp_path / "ck", validate_every=384,
-          validation_episodes=1)  # fmt: skip
+          validation_episodes=1, resumed=resumed.append)  # fmt: skip
+    assert resumed == [768]
     assert _digest(tmp_path / "cut.npz") == _digest(tmp_path / "whole.npz")

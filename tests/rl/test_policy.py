@@ -196,7 +196,7 @@ def test_every_shipped_policy_loads_and_says_how_it_was_trained() -> None:
     """The weights copi ships (seed 0 for the benchmark, the other seeds for the spread)
     pass the loader's checks, and each names the command that trained it, in the
     repository's terms (no directory of the machine it ran on)."""
-    from copi.baselines._ppo import POLICIES, load_policy
+    from copi.baselines._ppo import OBSERVATION_V3, POLICIES, load_policy, observation_size
 
     files = sorted(POLICIES.glob("*.npz")) + sorted((POLICIES / "seeds").glob("*.npz"))
     assert len(files) >= 7
@@ -222,6 +222,10 @@ def test_every_shipped_policy_loads_and_says_how_it_was_trained() -> None:
         if staged:
             stages = ",".join(f"{f}:{end}" for f, end in policy.info["curriculum"])
             assert f" --curriculum {stages} " in command
+        if " --task chauffeur " in command and " --levels sensor" in command:
+            # an evader at the game's level: it reads no static reading
+            assert policy.level == "sensor"
+            assert policy.size == observation_size(32, OBSERVATION_V3, "sensor", policy.frames)
         if path.parent.name == "seeds":
             seed = path.stem.rsplit("-s", 1)[1]
             assert command.endswith(f"--seed {seed}") and seed != "0"

@@ -307,3 +307,19 @@ def test_a_checkpoint_without_the_digest_of_last_pt_resumes(checkpoint: Path,
     summary = _train(tmp_path / "p.npz", ck, resumed=resumed.append)
     assert resumed == [768] and summary["steps"] == 1536
     assert "last_pt_sha256" in json.loads((ck / "last.json").read_text())
+
+
+def test_a_checkpoint_from_before_curricula_resumes_as_before(checkpoint: Path,
+                                                               tmp_path: Path) -> None:  # fmt: skip
+    """Environments' states written before they named the families their episode was
+    drawn from (curricula) resume as before: to the weights of the run not stopped."""
+    ck = tmp_path / "ck"
+    shutil.copytree(checkpoint, ck)
+    _json(ck, lambda m: {**m, "envs": [{k: v for k, v in e.items() if k != "drawn_families"}
+                                       for e in m["envs"]]})  # fmt: skip
+    assert "drawn_families" not in (ck / "last.json").read_text()
+    resumed: list[int] = []
+    _train(tmp_path / "cut.npz", ck, resumed=resumed.append)
+    _train(tmp_path / "whole.npz")
+    assert resumed == [768]
+    assert _digest(tmp_path / "cut.npz") == _digest(tmp_path / "whole.npz")

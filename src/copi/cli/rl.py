@@ -118,8 +118,9 @@ def train_command(
     ] = 2,
     curriculum: Annotated[
         str, typer.Option("--curriculum", help="PPO or SAC: stages before --families, "
-                          "FAMILY:STEP each (the step it ends at), e.g. "
-                          "star:400000,polygon:800000 (then --families to the end).")
+                          "FAMILY:STEP each (the step it ends at, at the first rollout from "
+                          "there), e.g. star:400000,polygon:800000 (then --families to the "
+                          "end).")
     ] = "",
 ) -> None:
     """Train PPO or SAC (Stable-Baselines3) for a local policy in copi's factorisation: it sees
@@ -215,6 +216,9 @@ def _stages(text: str) -> tuple[tuple[str, int], ...]:
         if not family.strip():
             raise InvalidArgumentError(f"--curriculum must be FAMILY:STEP stages, e.g. "
                                        f"star:400000,polygon:800000; got {part!r}")
+    if text.strip() and not stages:
+        raise InvalidArgumentError(f"--curriculum must be FAMILY:STEP stages, e.g. "
+                                   f"star:400000,polygon:800000; got {text!r}")
     return tuple(stages)
 
 

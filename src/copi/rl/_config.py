@@ -105,9 +105,11 @@ class TrainConfig:
     curriculum: tuple[tuple[str, int], ...] = ()
     """PPO or SAC: stages before ``families``, each (a family, the step it ends at), in
     order: the episodes are the first stage's family until its step, then the next's, and
-    from the last stage's step to the end ``families``' (a curriculum, e.g. static star
-    worlds, then polygon worlds with a few moving obstacles, then crowds). Validation is
-    on ``families`` throughout: the curve shows the target's success. () none."""
+    from the last stage's step to the end ``families``' (a curriculum, e.g. star worlds,
+    then polygon worlds, then crowds). A stage changes between rollouts, at the first one
+    that starts at or after its step (PPO's rollouts are ``envs`` x ``n_steps`` steps);
+    an episode under way goes on in its world. Validation is on ``families`` throughout:
+    the curve shows the target's success. () none."""
 
     def __post_init__(self) -> None:
         if self.algorithm not in ALGORITHMS:
@@ -183,6 +185,9 @@ class TrainConfig:
         if not isinstance(self.normalize_reward, bool):
             raise InvalidArgumentError("normalize_reward must be True or False; got "
                                        f"{self.normalize_reward!r}")  # fmt: skip
+        if not self.families or not self.levels:
+            raise InvalidArgumentError("families and levels must each name at least one; got "
+                                       f"families {self.families!r}, levels {self.levels!r}")
         # the first peer's chauffeur evader was learnt at map whatever the levels said
         check_layout(self.observation, self.frames,
                      self.levels if self.task == "navigation" or self.observation == OBSERVATION_V3
@@ -200,9 +205,6 @@ class TrainConfig:
                     f"checkpoint holds the whole buffer, {per:,} bytes a transition, and "
                     f"is at most 2 GiB); got {self.buffer_size:,}"
                 )
-        if not self.families or not self.levels:
-            raise InvalidArgumentError("families and levels must each name at least one; got "
-                                       f"families {self.families!r}, levels {self.levels!r}")
         self._check_curriculum()
 
     def _check_curriculum(self) -> None:
@@ -215,11 +217,15 @@ class TrainConfig:
                 f"{self.task}"
             )
         last = 0
+        stages = []
         for stage in self.curriculum:
-            if not (isinstance(stage, tuple) and len(stage) == 2 and isinstance(stage[0], str)
-                    and isinstance(stage[1], int) and not isinstance(stage[1], bool)):
+            if not (isinstance(stage, tuple | list) and len(stage) == 2
+                    and isinstance(stage[0], str) and isinstance(stage[1], int)
+                    and not isinstance(stage[1], bool)):  # fmt: skip
                 raise InvalidArgumentError("a curriculum's stage must be (family, the step it "
                                            f"ends at); got {stage!r}")  # fmt: skip
+            stage = (stage[0], stage[1])
+            stages.append(stage)
             check_family(stage[0])
             if not last < stage[1] < self.steps:
                 raise InvalidArgumentError(
@@ -228,6 +234,9 @@ class TrainConfig:
                     f"for {stage[0]}"
                 )
             last = stage[1]
+        # as a tuple of tuples whatever it came as (a policy's info keeps lists): hashable,
+        # and equal to the same stages given either way
+        object.__setattr__(self, "curriculum", tuple(stages))
 
     def families_at(self, steps: int) -> tuple[str, ...]:
         """The families of the training episodes after ``steps`` environment steps (the

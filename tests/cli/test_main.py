@@ -229,7 +229,32 @@ def test_pursuit_command(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> 
     )
     assert code == 0 and "capability-static: 3 games" in out, err
     code, _, err = run(["pursuit", str(caps), "-o", str(results), "--evader", "ghost"], capsys)
-    assert code == 2 and "evader must be one of capability, learnt, game; got 'ghost'" in err and "Traceback" not in err
+    assert code == 2 and "Traceback" not in err
+    assert ("evader must be one of capability, learnt, game or a registered method of level "
+            "sensor; got 'ghost'") in err  # fmt: skip
+    # a registered method plays as the study plays it (PursuitConfig's guard), the same games
+    code, out, err = run(["pursuit", str(caps), "-o", str(results), "--games", "3",
+                          "--horizon", "60", "--evader", "ppo-chauffeur-sensor"], capsys)  # fmt: skip
+    assert code == 0 and "ppo-chauffeur-sensor-dynamic: 3 games" in out, err
+    from copi.experiments import PursuitConfig, pursue, run_game
+    from copi.results import ResultsStore
+
+    config = PursuitConfig(capabilities=str(caps), evader="ppo-chauffeur-sensor", games=3,
+                           horizon=60)  # fmt: skip
+    with ResultsStore(results, readonly=True) as store:
+        before = len(store.runs())
+    run_id = pursue(config, results)  # the CLI's run: found whole, nothing played
+    with ResultsStore(results, readonly=True) as store:
+        assert len(store.runs()) == before
+        rows = store.games(run_id)
+    assert [r.survival for r in rows] == [run_game(config, k).survival for k in range(3)]
+    for args, message in ((["--evader", "ppo-star-map"], "needs level map; the game gives sensor"),
+                          (["--evader", "ppo", "--preset", "faithful"],
+                           "--preset faithful plays the preset's evader")):  # fmt: skip
+        code, _, err = run(["pursuit", str(caps), "-o", str(tmp_path / "h.sqlite"), *args],
+                           capsys)  # fmt: skip
+        assert code == 2 and message in err and "Traceback" not in err
+    assert not (tmp_path / "h.sqlite").exists()
 
 
 @pytest.mark.parametrize("name", ["learnt", "learnt-motion", "predictive"])

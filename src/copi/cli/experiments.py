@@ -307,8 +307,9 @@ def pursuit_command(
     evader: Annotated[
         str | None,
         typer.Option("--evader", help="capability (through the capability chain), learnt "
-                     "(through the learnt preset's agent) or game (the game's direction "
-                     "itself); default: the capabilities' mode."),
+                     "(through the learnt preset's agent), game (the game's direction "
+                     "itself) or a registered method of level sensor (e.g. "
+                     "ppo-chauffeur-sensor); default: the capabilities' mode."),
     ] = None,
     seed: Annotated[int, seed_option("the games")] = 0,
     horizon: Annotated[int, typer.Option("--horizon", min=1, help="Steps to survive.")] = 300,

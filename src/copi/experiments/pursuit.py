@@ -235,9 +235,24 @@ def resolve_evader(
     :func:`copi.methods.resolve` settles them for navigation: the preset's
     (or, without one, the mode the capabilities were learnt for) evader and guard; a
     ``--guard`` contradicting a preset, an evader the preset does not play, or a file
-    learnt for another mode is refused."""
+    learnt for another mode is refused. A registered method (``--evader
+    ppo-chauffeur-sensor``) plays as :class:`PursuitConfig` plays it, with this run's
+    guard where it is registered with one."""
     if evader is not None and evader not in EVADERS:
-        raise InvalidArgumentError(f"evader must be one of {', '.join(EVADERS)}; got {evader!r}")
+        # a registered method of level sensor (PursuitConfig checks the level), under the
+        # game's direction; the capabilities' mode plays no part, the guard only where the
+        # method is registered with one
+        try:
+            method_spec(evader)
+        except InvalidArgumentError:
+            raise InvalidArgumentError(f"evader must be one of {', '.join(EVADERS)} or a "
+                                       f"registered method of level sensor; got "
+                                       f"{evader!r}") from None  # fmt: skip
+        if preset is not None:
+            raise InvalidArgumentError(f"--preset {preset} plays the preset's evader; got "
+                                       f"--evader {evader}")  # fmt: skip
+        return evader, float(PursuitConfig(capabilities=None, evader="game").guard
+                             if guard is None else guard)  # the config's default guard
     name = preset if preset is not None else preset_of(caps)
     if name == "learnt-motion":
         raise InvalidArgumentError(

@@ -6,7 +6,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-__all__ = ["kept_times"]
+__all__ = ["finish_cost_figure", "kept_times", "splice_section"]
 
 
 def kept_times(path: Path, measured: dict[str, tuple[float, Any]]) -> dict[str, Any]:
@@ -20,3 +20,39 @@ def kept_times(path: Path, measured: dict[str, tuple[float, Any]]) -> dict[str, 
             times[key] = value
     path.write_text(json.dumps(times))
     return times
+
+
+def splice_section(page: Path, heading: str, lines: list[str], *, after: str = "",
+                   before: str = "") -> None:  # fmt: skip
+    """``lines`` (a section starting with ``heading``) into ``page`` in place of its last
+    version; where there is none, before the line starting with ``before``, or before the
+    next section after the one whose heading starts with ``after``."""
+    text = page.read_text().split("\n")
+
+    def next_section(i: int) -> int:
+        return next(k for k in range(i + 1, len(text)) if text[k].startswith("## "))
+
+    if heading in text:
+        start = text.index(heading)
+        end = next_section(start)
+    elif before:
+        start = end = next(i for i, ln in enumerate(text) if ln.startswith(before))
+    else:
+        start = end = next_section(next(i for i, ln in enumerate(text) if ln.startswith(after)))
+    page.write_text("\n".join([*text[:start], *lines, *text[end:]]))
+
+
+def finish_cost_figure(fig: Any, ax: Any, out: Path, *, xlabel: str, title: str) -> None:
+    """A learning-cost figure's axes (samples on a log scale against validation success),
+    its legend beside them, written to ``out``."""
+    import matplotlib.pyplot as plt
+
+    ax.set_xscale("log")
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel("success on validation episodes (%)")
+    ax.set_title(title)
+    ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5), frameon=False)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(out, dpi=120, bbox_inches="tight")
+    plt.close(fig)

@@ -60,7 +60,7 @@ from copi.methods import (  # noqa: E402
 from copi.reports import read_benchmark  # noqa: E402
 from copi.results import ResultsStore, paired_difference, summarize_rows  # noqa: E402
 from copi.rl import TrainConfig, validation_success  # noqa: E402
-from studies._common import kept_times  # noqa: E402
+from studies._common import finish_cost_figure, kept_times  # noqa: E402
 from studies.rl_lean import lean_like_lines  # noqa: E402
 from studies.rl_new_task import lines as new_task_lines  # noqa: E402
 
@@ -807,16 +807,12 @@ def figure(policies: dict[str, dict], copi_val: dict[str, float], copi_samples: 
         if lean is not None:
             ax.plot([lean[1]], [100 * lean[0][name]], "D", ms=8, color=c,
                     markeredgecolor="k")  # fmt: skip
-    ax.set_xscale("log")
-    ax.set_xlabel("learning samples (environment steps; copi: exploration and probes, no task)")
-    ax.set_ylabel("success on validation episodes (%)")
-    ax.set_title("Learning cost: PPO's curves against copi-learnt (stars; diamonds: learnt at "
-                 "1/100 of PPO's samples), seed 1 episodes")
-    ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5), frameon=False)
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(out, dpi=120, bbox_inches="tight")
-    plt.close(fig)
+    finish_cost_figure(
+        fig, ax, out,
+        xlabel="learning samples (environment steps; copi: exploration and probes, no task)",
+        title="Learning cost: PPO's curves against copi-learnt (stars; diamonds: learnt at "
+              "1/100 of PPO's samples), seed 1 episodes",
+    )  # fmt: skip
 
 
 def main() -> None:

@@ -41,7 +41,7 @@ from copi.methods import make_agent, parse_methods  # noqa: E402
 from copi.reports import read_benchmark  # noqa: E402
 from copi.results import paired_difference, summarize_rows  # noqa: E402
 from copi.rl import TrainConfig, validation_success  # noqa: E402
-from studies._common import kept_times  # noqa: E402
+from studies._common import finish_cost_figure, kept_times, splice_section  # noqa: E402
 
 FAMILIES = ("star", "polygon", "indoor", "maps", "crowd")
 LEAN_LEARNT = {"directions": 16, "safety": True, "probe_families": "star", "worlds": 20,
@@ -147,16 +147,12 @@ def figure(curves: dict[str, dict], copi_val: dict[str, float], samples: int, ou
                 label=f"{name} (PPO)")  # fmt: skip
         ax.plot([samples], [100 * copi_val[name]], "D", ms=9, color=c, markeredgecolor="k",
                 label=f"copi-predictive at 1/100 on {name}'s episodes")  # fmt: skip
-    ax.set_xscale("log")
-    ax.set_xlabel("learning samples (environment steps; copi: its walks and probes, no task)")
-    ax.set_ylabel("success on validation episodes (%)")
-    ax.set_title("Learnt alone: the second peer's curves against copi-predictive learnt at "
-                 "1/100 of its samples (seed 1 episodes)")
-    ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5), frameon=False)
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(out, dpi=120, bbox_inches="tight")
-    plt.close(fig)
+    finish_cost_figure(
+        fig, ax, out,
+        xlabel="learning samples (environment steps; copi: its walks and probes, no task)",
+        title="Learnt alone: the second peer's curves against copi-predictive learnt at "
+              "1/100 of its samples (seed 1 episodes)",
+    )  # fmt: skip
 
 
 def lean_like_lines(bench: Path, episodes: int, workers: int, figure_path: Path) -> list[str]:
@@ -262,18 +258,6 @@ def lean_like_lines(bench: Path, episodes: int, workers: int, figure_path: Path)
     ]
 
 
-def splice(page: Path, lines: list[str]) -> None:
-    """``lines`` into ``page`` in place of the section's last version (before the first
-    peer's hundredth, where there is none)."""
-    text = page.read_text().split("\n")
-    if SECTION in text:
-        start = text.index(SECTION)
-        end = next(i for i in range(start + 1, len(text)) if text[i].startswith("## "))
-    else:
-        start = end = text.index(NEXT)
-    page.write_text("\n".join([*text[:start], *lines, *text[end:]]))
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--bench", default="results/rl-lean")
@@ -284,7 +268,7 @@ def main() -> None:
     out = Path(a.out)
     lines = lean_like_lines(Path(a.bench), a.episodes, a.workers,
                             out.parent / "rl-lean-like.png")  # fmt: skip
-    splice(out, lines)
+    splice_section(out, SECTION, lines, before=NEXT)
     print("\n".join(lines))
     print(f"wrote {out}")
 

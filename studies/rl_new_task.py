@@ -26,6 +26,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from copi.experiments import PursuitConfig, ensure_capabilities, pursue  # noqa: E402
 from copi.methods import method_names, method_spec  # noqa: E402
 from copi.results import ResultsStore, paired_difference  # noqa: E402
+from studies._common import splice_section  # noqa: E402
 
 FIGURE = "rl-curve-chauffeur-sensor.png"
 """The learning curve of the second peer trained for the game (validation survival)."""
@@ -109,17 +110,6 @@ def lines(bench: Path, games: int) -> list[str]:
     ]
 
 
-def splice(page: Path, section: list[str]) -> None:
-    text = page.read_text().split("\n")
-    if SECTION in text:
-        start = text.index(SECTION)
-        end = next(i for i in range(start + 1, len(text)) if text[i].startswith("## "))
-    else:
-        after = next(i for i, ln in enumerate(text) if ln.startswith(AFTER))
-        start = end = next(i for i in range(after + 1, len(text)) if text[i].startswith("## "))
-    page.write_text("\n".join([*text[:start], *section, *text[end:]]))
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--bench", default="results/rl-game")
@@ -127,7 +117,7 @@ def main() -> None:
     ap.add_argument("--out", default="docs/rl.md")
     a = ap.parse_args()
     section = lines(Path(a.bench), a.games)
-    splice(Path(a.out), section)
+    splice_section(Path(a.out), SECTION, section, after=AFTER)
     print("\n".join(section))
     print(f"wrote {a.out}")
 

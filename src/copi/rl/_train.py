@@ -232,14 +232,10 @@ def train(
                 best = load_policy(ckpt / "best.npz")
             if resumed is not None:
                 resumed(int(model.num_timesteps))
-    stage = [config.families_at(0)]
-
     def follow_curriculum() -> None:
         """The training episodes' families for the steps done (a curriculum's stage)."""
-        now = config.families_at(int(model.num_timesteps))
-        if now != stage[0]:
-            vec.set_attr("families", now)
-            stage[0] = now
+        if config.curriculum:
+            vec.set_attr("families", config.families_at(int(model.num_timesteps)))
 
     follow_curriculum()  # a resumed run goes on in its stage
     t0 = time.perf_counter()

@@ -41,8 +41,8 @@ def test_no_guard_code_runs(predictive_caps: Path, monkeypatch: pytest.MonkeyPat
     with pytest.raises(Exception, match="guard was called"):
         run_episode(make_agent("compass-guard"), draw_episode("crowd", 0, 1), sensing="map",
                     max_steps=50)  # the stand-ins bite  # fmt: skip
-    for k in range(3):
-        out = run_episode(PredictiveAgent(caps), draw_episode("crowd", k, 1), sensing="map",
+    for k, level in ((0, "map"), (1, "map"), (2, "map"), (0, "sensor"), (1, "sensor")):
+        out = run_episode(PredictiveAgent(caps), draw_episode("crowd", k, 1), sensing=level,
                           max_steps=200)  # fmt: skip
         assert out.outcome in ("success", "collision", "timeout") and out.steps > 0
 
@@ -75,14 +75,57 @@ def test_it_waits_rather_than_walk_into_a_body_crossing_its_way(predictive_caps:
     assert outcomes.count("success") >= 3, outcomes
 
 
+def test_at_sensor_a_hit_where_its_rays_passed_is_what_moves(predictive_caps: Path) -> None:
+    """Level sensor: a hit in cells its rays passed through before is something that
+    moved there (unexplained, for the tracker); hits where rays always stopped are walls,
+    neighbours joined into segments; it places itself at minus the relative goal."""
+    from copi.core import Observation
+    from copi.runs import make_task
+    from copi.world import Simulator, World
+
+    caps = Capabilities.load(predictive_caps)
+    agent = PredictiveAgent(caps)
+    room = World([[-20, -20], [20, -20], [20, 20], [-20, 20]], start=[0, 0], goal=[10, 0])
+    task = make_task(Simulator.from_world(room, 0), "sensor")
+    agent.reset(task)
+    n, far = task.n_rays, task.max_range
+    goal = np.array([10.0, 0.0])
+    ring = np.full(n, 5.0)
+    ring[0] = far  # nothing along +x yet
+    agent.sees(Observation(ranges=ring, goal=goal))
+    now = ring.copy()
+    now[0] = 3.0  # something came where the ray passed
+    p, static, segs = agent.sees(Observation(ranges=now, goal=goal))
+    assert np.array_equal(p, -goal)
+    assert static[0] == far and np.array_equal(static[1:], now[1:])
+    ends = segs.reshape(-1, 2, 2) - p
+    assert np.allclose(np.hypot(*ends.reshape(-1, 2).T), 5.0)  # only the ring's hits
+    assert len(segs) == (n - 2) + (n - 1)  # neighbours joined, and each hit itself
+
+
+def test_at_sensor_it_lets_a_body_crossing_its_way_pass(predictive_caps: Path) -> None:
+    """The corridor of the map-level test, at level sensor: no map, no position; the
+    bodies are told from walls by the agent's own readings."""
+    from copi.world import ObstacleSpec, Simulator, World
+
+    caps = Capabilities.load(predictive_caps)
+    hall = World([[0, 0], [30, 0], [30, 12], [0, 12]], start=[3, 6], goal=[27, 6])
+    outcomes = []
+    for seed in range(4):
+        sim = Simulator.from_world(hall, seed, obstacles=ObstacleSpec(count=(3, 3), speed=0.6))
+        outcomes.append(run_episode(PredictiveAgent(caps), sim, sensing="sensor",
+                                    max_steps=200).outcome)  # fmt: skip
+    assert outcomes.count("success") >= 3, outcomes
+
+
 def test_what_it_cannot_run_on_is_one_line(
     predictive_caps: Path, learnt_caps: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     out = str(tmp_path / "r.sqlite")
-    msg = _one_line_error(*run(["evaluate", str(predictive_caps), "--method", "copi-predictive",
+    msg = _one_line_error(*run(["evaluate", str(predictive_caps), "--method", "tracked-mpc",
                                 "--sensing", "sensor", "-o", out, "--worlds", "1"],
                                capsys)[::2])  # fmt: skip
-    assert "copi-predictive needs sensing level 'map' or above" in msg
+    assert "tracked-mpc needs sensing level 'map' or above" in msg  # its peer has no sensor
     msg = _one_line_error(*run(["evaluate", str(learnt_caps), "--method", "copi-predictive",
                                 "-o", out, "--worlds", "1"], capsys)[::2])  # fmt: skip
     assert "a model of what moves" in msg and "copi learn --preset predictive" in msg
@@ -113,6 +156,15 @@ def test_watch_draws_what_it_expected(predictive_caps: Path, tmp_path: Path) -> 
     first = _frame(watched, 0, np.asarray(watched.sim.path), np.asarray(watched.sim.traces), 480)
     pink = np.all(np.abs(first.reshape(-1, 3).astype(int) - (0xF2, 0xA7, 0xC3)) < 12, axis=1)
     assert pink.sum() > 20  # the first: the futures it expected, drawn
+    # at sensor it plans in the goal's frame; what is drawn is in the world's
+    blind = watch_episode("copi-predictive", caps, family="crowd", episode=1, seed=1,
+                          max_steps=12, sensing="sensor")  # fmt: skip
+    path = np.asarray(blind.sim.path)
+    seen = [(t, s.futures) for t, s in enumerate(blind.steps) if s.futures is not None
+            and s.futures.shape[2]]  # fmt: skip
+    assert seen
+    for t, fut in seen:
+        assert np.hypot(*(fut[:, 0] - path[t]).reshape(-1, 2).T).max() < 11.0
 
 
 def test_many_agents_decide_at_once_as_one_by_one(predictive_caps: Path) -> None:

@@ -166,10 +166,12 @@ def _register_builtins() -> None:
     # so run apart like model-oracle: --methods tracked-mpc)
     # copi's learnt parts carrying the decision: one planning decision costs milliseconds,
     # so run apart like tracked-mpc: --methods copi-predictive
-    reg("copi-predictive", PredictiveAgent, capabilities="predictive", sensing="map",
+    reg("copi-predictive", PredictiveAgent, capabilities="predictive", sensing="sensor",
+        levels=("map",),
         summary="plans its move over futures of what moves drawn from its learnt model "
         "(learnt once from its own task-free walks; the planner is the model-oracle's), each "
-        "move also costed by the learnt safety network; no hand-written guard")
+        "move also costed by the learnt safety network; no hand-written guard (also at "
+        "`sensor`, on the walls it sees: copi-predictive@sensor)")
     reg("copi-predictive-contexts", PredictiveAgent, capabilities="predictive", sensing="map",
         ablation=True, params={"beta": 0.5},
         summary="copi-predictive whose moves also cost what the recognised context's template "

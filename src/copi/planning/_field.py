@@ -10,33 +10,39 @@ visibility graph (:mod:`copi.planning`) would need a query per point, and scipy'
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
 from copi.geometry import clearance
+from copi.geometry.kernels import point_segment_d2
 from copi.planning.kernels import heap_pop, heap_push, heap_room
 from copi.world import World
 
-__all__ = ["GoalField"]
+__all__ = ["GoalField", "clearance_grid"]
 
 _SQRT2 = math.sqrt(2.0)
 
 
 @njit(cache=True)
-def _dijkstra(free, gi, gj, h, out):  # type: ignore[no-untyped-def]
-    """Distances from cell (gi, gj) over the 8-connected free cells (no corner cutting),
-    cell side ``h``, into ``out`` (inf where unreachable)."""
+def _dijkstra(free, seeds, h, out):  # type: ignore[no-untyped-def]
+    """Distances over the 8-connected free cells (no corner cutting), cell side ``h``,
+    from the free cells where ``seeds`` is finite, each starting at its seed's value,
+    into ``out`` (inf where unreachable)."""
     ny, nx = free.shape
     out[:, :] = np.inf
-    if not free[gi, gj]:
-        return
     cap = 4 * (nx + ny) + 64
     keys = np.empty(cap)
     items = np.empty(cap, dtype=np.int64)
-    out[gi, gj] = 0.0
-    size = heap_push(keys, items, 0, 0.0, gi * nx + gj)
+    size = 0
+    for i in range(ny):
+        for j in range(nx):
+            if free[i, j] and seeds[i, j] < np.inf:
+                out[i, j] = seeds[i, j]
+                keys, items = heap_room(keys, items, size)
+                size = heap_push(keys, items, size, seeds[i, j], i * nx + j)
     done = np.zeros((ny, nx), dtype=np.bool_)
     while size > 0:
         d, u, size = heap_pop(keys, items, size)
@@ -64,6 +70,27 @@ def _dijkstra(free, gi, gj, h, out):  # type: ignore[no-untyped-def]
                     out[a, b] = nd
                     keys, items = heap_room(keys, items, size)
                     size = heap_push(keys, items, size, nd, a * nx + b)
+
+
+@njit(cache=True)
+def clearance_grid(segs, x0, y0, h, ny, nx, cap):  # type: ignore[no-untyped-def]
+    """Distance to the nearest of ``segs`` at the centres of an ny x nx grid (origin x0,
+    y0, side h), ``cap`` wherever no wall is nearer: each segment visits only the cells
+    within ``cap`` of it, so a box with a few dozen walls costs a few dozen small loops
+    (the clearance of every cell against every wall would cost a hundred times more)."""
+    out = np.full((ny, nx), cap * cap)
+    for k in range(segs.shape[0]):
+        ax, ay, bx, by = segs[k, 0], segs[k, 1], segs[k, 2], segs[k, 3]
+        j0 = max(0, int(math.floor((min(ax, bx) - cap - x0) / h)))
+        j1 = min(nx - 1, int(math.ceil((max(ax, bx) + cap - x0) / h)))
+        i0 = max(0, int(math.floor((min(ay, by) - cap - y0) / h)))
+        i1 = min(ny - 1, int(math.ceil((max(ay, by) + cap - y0) / h)))
+        for i in range(i0, i1 + 1):
+            for j in range(j0, j1 + 1):
+                d = point_segment_d2(x0 + j * h, y0 + i * h, segs, k)
+                if d < out[i, j]:
+                    out[i, j] = d
+    return np.sqrt(out)
 
 
 @njit(cache=True, inline="always")
@@ -114,13 +141,40 @@ class GoalField:
         ys = lo[1] + h * np.arange(ny)
         pts = np.column_stack([np.tile(xs, ny), np.repeat(ys, nx)])
         free = (clearance(pts, segs) >= radius - h / _SQRT2) & world.contains(pts)
-        self.free = free.reshape(ny, nx)
-        self.x0, self.y0, self.h = float(lo[0]), float(lo[1]), float(h)
+        self._search(free.reshape(ny, nx), lo[0], lo[1], h, goal, open_edges=False)
+
+    @classmethod
+    def open(cls, clear: NDArray[np.float64], x0: float, y0: float, h: float,
+             goal: NDArray[np.float64], radius: float) -> GoalField:  # fmt: skip
+        """The field over a box of a world known only by some walls (level ``sensor``:
+        the walls the agent sees), from their clearance ``clear`` at the centres of the
+        box's cells (origin ``x0``, ``y0``, side ``h``): a cell is free when the disc fits
+        at its centre (the cells a planner on the same grid may stand on), unknown space
+        is free, and the way out of the box at a cell of its edge is the straight line
+        from there to the goal, wherever the goal is."""
+        self = cls.__new__(cls)
+        self._search(clear >= radius, x0, y0, h, goal, open_edges=True)
+        return self
+
+    def _search(self, free: NDArray[np.bool_], x0: float, y0: float, h: float, goal: Any,
+                open_edges: bool) -> None:  # fmt: skip
+        self.free = free
+        ny, nx = free.shape
+        self.x0, self.y0, self.h = float(x0), float(y0), float(h)
         self.goal = np.asarray(goal, dtype=np.float64).copy()
-        gj = int(np.clip(round((self.goal[0] - self.x0) / h), 0, nx - 1))
-        gi = int(np.clip(round((self.goal[1] - self.y0) / h), 0, ny - 1))
+        seeds = np.full((ny, nx), np.inf)
+        gj = int(round((self.goal[0] - self.x0) / h))
+        gi = int(round((self.goal[1] - self.y0) / h))
+        if open_edges:  # leaving the box: the straight way on from its edge
+            edge = np.zeros((ny, nx), dtype=bool)
+            edge[[0, -1], :] = edge[:, [0, -1]] = True
+            dx = self.x0 + h * np.arange(nx) - self.goal[0]
+            dy = self.y0 + h * np.arange(ny) - self.goal[1]
+            seeds[edge] = np.hypot(dx[None, :], dy[:, None])[edge]
+        if 0 <= gi < ny and 0 <= gj < nx or not open_edges:
+            seeds[int(np.clip(gi, 0, ny - 1)), int(np.clip(gj, 0, nx - 1))] = 0.0
         self.dist = np.empty((ny, nx))
-        _dijkstra(self.free, gi, gj, self.h, self.dist)
+        _dijkstra(self.free, seeds, self.h, self.dist)
 
     def at(self, x: float, y: float) -> float:
         """The distance to go from (x, y) (see :func:`field_at`)."""

@@ -17,6 +17,7 @@ the two linear motions over the step is below the sum of radii (``closest_approa
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from numba import njit
@@ -31,7 +32,7 @@ from copi.geometry.kernels import (
     local_segments,
     sweep_one,
 )
-from copi.planning._field import GoalField, field_at
+from copi.planning._field import GoalField, clearance_grid, field_at
 from copi.planning._hindsight import covers, disc_cells, hindsight_values
 from copi.world import World
 
@@ -196,6 +197,29 @@ def _interp(V, x0, y0, res, x, y):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
+def _moves_clear(free, offsets, ny, nx):  # type: ignore[no-untyped-def]
+    """``out[o, i, j]``: the move ``offsets[o]`` from cell (i, j) of an ny x nx grid is
+    clear of walls at its start and its four quarter points, on the grid ``free`` four
+    times as fine."""
+    out = np.zeros((offsets.shape[0], ny, nx), dtype=np.bool_)
+    for o in range(offsets.shape[0]):
+        di = offsets[o, 0]
+        dj = offsets[o, 1]
+        for i in range(ny):
+            for j in range(nx):
+                good = free[4 * i, 4 * j]
+                for frac in range(1, 5):  # quarter points of the move, in fine cells
+                    a = 4 * i + di * frac
+                    b = 4 * j + dj * frac
+                    if not good or a < 0 or b < 0 or a >= 4 * ny or b >= 4 * nx:
+                        good = False
+                        break
+                    good = free[a, b]
+                out[o, i, j] = good
+    return out
+
+
+@njit(cache=True)
 def field_grid(dist, fx0, fy0, fh, x0, y0, res, ny, nx, gx, gy):  # type: ignore[no-untyped-def]
     """The field's distance to go at the centres of an ny x nx grid (origin x0, y0)."""
     out = np.empty((ny, nx))
@@ -318,6 +342,8 @@ OFFSETS = np.array(
      (2, 0), (-2, 0), (0, 2), (0, -2)], dtype=np.int64,
 )  # fmt: skip
 RES = 0.5
+OPEN_CAP = 6.0
+"""How far :meth:`FuturesPlanner.reset_open` measures the clearance of walls (steps)."""
 PLANS = ("hindsight", "mean", "greedy")
 """How :class:`FuturesPlanner` values the window's cells (see it)."""
 
@@ -382,6 +408,8 @@ class FuturesPlanner:
         self.no_cost = np.zeros(len(self.moves))
         self.costs = np.full(len(self.moves), np.inf)
         """Each move's expected cost at the last plan (inf: a wall stops it), steps."""
+        # the window: as far as the horizon's steps go (greedy: the first move's reach)
+        self.half = (int(math.ceil(self.horizon / RES)) if plan != "greedy" else 2) + 1
 
     @property
     def steps(self) -> int:
@@ -391,43 +419,57 @@ class FuturesPlanner:
     def reset(self, world: World, goal: NDArray[np.float64], radius: float,
               tolerance: float) -> None:  # fmt: skip
         """The episode's grids, for an agent of ``radius`` going to ``goal``."""
+        goal = np.asarray(goal, dtype=np.float64)
+        self._grids(world.segments, GoalField(world, goal, float(radius)), world.contains,
+                    goal, radius, tolerance)  # fmt: skip
+
+    def reset_open(self, segments: NDArray[np.float64], centre: NDArray[np.float64],
+                   goal: NDArray[np.float64], radius: float, tolerance: float) -> None:  # fmt: skip
+        """The grids of a world known only by the walls ``segments`` (level ``sensor``:
+        the walls the agent sees), for one plan from ``centre``: a box just holding the
+        window around it, whose unknown space is free and whose edges lead straight on
+        to ``goal`` (:meth:`GoalField.open`). Clearances are kept up to ``OPEN_CAP``
+        only (beyond it, the futures' bodies test the walls themselves)."""
+        segs = np.ascontiguousarray(np.asarray(segments, dtype=np.float64).reshape(-1, 4))
+        n = 2 * (self.half + 3)  # window cells across, and a margin
+        x0, y0 = np.asarray(centre, dtype=np.float64) - (self.half + 3) * RES
+        fine = RES / 4
+        clear = clearance_grid(segs, x0, y0, fine, 4 * n, 4 * n, OPEN_CAP)
+        goal = np.asarray(goal, dtype=np.float64)
+        field = GoalField.open(clear[::4, ::4], x0, y0, RES, goal, float(radius))
+        self._grids(segs, field, None, goal, radius, tolerance, clear=clear)
+
+    def _grids(self, segs: NDArray[np.float64], field: GoalField, contains: Any,
+               goal: NDArray[np.float64], radius: float, tolerance: float,
+               clear: NDArray[np.float64] | None = None) -> None:  # fmt: skip
         self.r = float(radius)
         self.tol = float(tolerance)
-        self.goal = np.asarray(goal, dtype=np.float64).copy()
-        self.segs = np.ascontiguousarray(world.segments)
-        self.field = GoalField(world, self.goal, self.r)
-        f = self.field
+        self.goal = goal.copy()
+        self.segs = np.ascontiguousarray(segs)
+        self.field = f = field
         # The episode's grids: cells of RES from the field's origin; walls checked on a
         # grid twice as fine (cell centres, midpoints, quarter points of every move).
-        ny = int(f.dist.shape[0] * f.h / RES) + 2
-        nx = int(f.dist.shape[1] * f.h / RES) + 2
         fine = RES / 4
-        fy, fx = np.mgrid[0 : 4 * ny, 0 : 4 * nx]
-        pts = np.column_stack([f.x0 + fine * fx.ravel(), f.y0 + fine * fy.ravel()])
-        inside = world.contains(pts)
-        clear = np.where(inside, clearance(pts, self.segs), 0.0).reshape(4 * ny, 4 * nx)
+        if clear is None:
+            ny = int(f.dist.shape[0] * f.h / RES) + 2
+            nx = int(f.dist.shape[1] * f.h / RES) + 2
+            fy, fx = np.mgrid[0 : 4 * ny, 0 : 4 * nx]
+            pts = np.column_stack([f.x0 + fine * fx.ravel(), f.y0 + fine * fy.ravel()])
+            clear = np.where(contains(pts), clearance(pts, self.segs), 0.0)
+            clear = clear.reshape(4 * ny, 4 * nx)
+        ny, nx = clear.shape[0] // 4, clear.shape[1] // 4
         self.clear = np.ascontiguousarray(clear)
         self.fine = fine
         free = clear >= self.r
         ii, jj = np.mgrid[0:ny, 0:nx]
         self.ok = free[4 * ii, 4 * jj]
-        self.mid_ok = np.zeros((len(OFFSETS), ny, nx), dtype=bool)
-        for o, (di, dj) in enumerate(OFFSETS):
-            good = self.ok.copy()
-            for frac in (1, 2, 3, 4):  # quarter points of the move, in fine cells
-                a = 4 * ii + di * frac
-                b = 4 * jj + dj * frac
-                inside = (a >= 0) & (b >= 0) & (a < 4 * ny) & (b < 4 * nx)
-                good &= inside & free[np.clip(a, 0, 4 * ny - 1), np.clip(b, 0, 4 * nx - 1)]
-            self.mid_ok[o] = good
+        self.mid_ok = _moves_clear(free, OFFSETS, ny, nx)
         self.terminal = field_grid(f.dist, f.x0, f.y0, f.h, f.x0, f.y0, RES, ny, nx,
                                    self.goal[0], self.goal[1])  # fmt: skip
         cy = f.y0 + RES * ii
         cx = f.x0 + RES * jj
         self.goal_cells = np.hypot(cx - self.goal[0], cy - self.goal[1]) <= self.tol
         self.terminal[self.goal_cells] = 0.0
-        # the window: as far as the horizon's steps go (greedy: the first move's reach)
-        self.half = (int(math.ceil(self.horizon / RES)) if self.plan_kind != "greedy" else 2) + 1
 
     def plan(
         self,

@@ -89,6 +89,8 @@ class _Explaining(Agent):
         self.sensing = agent.sensing
         self.steers_itself = agent.steers_itself
         self.steps: list[Step] = []
+        self.goal = np.zeros(2)
+        """The goal in the world (copi-predictive plans in the goal's frame at sensor)."""
 
     def reset(self, task: Task) -> None:
         self.agent.reset(task)
@@ -137,7 +139,8 @@ class _Explaining(Agent):
                 f"expected cost (steps) of the best moves: {best}"
             )
             cands = moves[ok & np.any(moves != 0, axis=1)]
-            self.steps.append(Step(obs.ranges.copy(), action, text, cands, e["futures"]))
+            futures = e["futures"] + (self.goal if agent.seen is not None else 0.0)
+            self.steps.append(Step(obs.ranges.copy(), action, text, cands, futures))
             return action
         elif isinstance(agent, LearntAgent):
             agent.explain = True
@@ -261,6 +264,7 @@ def watch_episode(
         world_file=None if world_file is None else str(world_file),
         agent_radius=agent_radius, n_rays=n_rays, max_range=max_range, record=True,
     )  # fmt: skip
+    agent.goal = np.asarray(sim.goal, dtype=np.float64)
     out = run_episode(agent, sim, sensing=sensing, max_steps=max_steps, strategy=strategy)
     return WatchedEpisode(sim, method, sensing, episode, seed, agent.steps, out)
 

@@ -103,6 +103,24 @@ def test_at_sensor_a_hit_where_its_rays_passed_is_what_moves(predictive_caps: Pa
     assert len(segs) == (n - 2) + (n - 1)  # neighbours joined, and each hit itself
 
 
+def test_a_small_group_of_hits_moves_together_a_wall_does_not() -> None:
+    """One hit of a body fell in seen space: the body's other hits are its own; one hit
+    of a long wall did (a ray grazing it before): the wall's other hits stay walls."""
+    from copi.online._predictive import _whole_bodies
+
+    n = 32
+    ang = 2 * np.pi * np.arange(n) / n
+    r = np.full(n, 10.0)
+    r[3:6] = 4.0  # a body: three rays' hits, 0.8 apart
+    r[10:26] = 5.0 / np.maximum(np.abs(np.cos(ang[10:26] - np.pi)), 0.3)  # a long wall
+    hit = r < 10.0
+    ends = r[:, None] * np.column_stack([np.cos(ang), np.sin(ang)])
+    moved = np.zeros(n, dtype=bool)
+    moved[[4, 18]] = True
+    out = _whole_bodies(hit, ends, moved)
+    assert out[3:6].all() and out[18] and out.sum() == 4
+
+
 def test_at_sensor_it_lets_a_body_crossing_its_way_pass(predictive_caps: Path) -> None:
     """The corridor of the map-level test, at level sensor: no map, no position; the
     bodies are told from walls by the agent's own readings."""

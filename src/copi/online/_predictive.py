@@ -113,6 +113,7 @@ class PredictiveAgent(Agent):
         loss: float = 200.0,
         margin: float = 0.1,
         escape: float = 0.1,
+        together: int = 1,
         seed: int = 0,
     ) -> None:
         if capabilities.motion_model is None or capabilities.safety is None:
@@ -127,7 +128,8 @@ class PredictiveAgent(Agent):
         for key, v in (("alpha", alpha), ("beta", beta)):
             if not (isinstance(v, int | float) and math.isfinite(v) and 0 <= v <= 1e3):
                 raise InvalidArgumentError(f"{key} must be a number in [0, 1000]; got {v!r}")
-        self.planner = FuturesPlanner(horizon=horizon, loss=loss, margin=margin, escape=escape)
+        self.planner = FuturesPlanner(horizon=horizon, loss=loss, margin=margin, escape=escape,
+                                      together=together)  # fmt: skip
         self.capabilities = capabilities
         self.name = name
         self.samples = int(samples)

@@ -363,6 +363,11 @@ class FuturesPlanner:
     second move clear of that future's next step by ``escape`` more) plus one step plus
     the value of the cell it reaches, plus a cost of the move's own when one is given.
 
+    ``together`` > 1 values that many futures as one in the hindsight: every disc of
+    each is in the one solve, so a cell's way must clear all of them, as a plan the agent
+    commits to before it can tell those futures apart would (fewer solves, and less
+    clairvoyant; the first move's check still counts each future alone).
+
     ``plan="mean"`` values cells against the mean occupancy instead (each cell entered
     costing ``risk`` times minus the log of surviving it, the future ``discount``-ed);
     ``plan="greedy"`` looks no further than the first move's check (a cell's value is its
@@ -385,7 +390,11 @@ class FuturesPlanner:
         discount: float = 0.3,
         margin: float = 0.1,
         escape: float = 0.1,
+        together: int = 1,
     ) -> None:
+        if int(together) != together or not 1 <= together <= 64:
+            raise InvalidArgumentError(f"together must be a whole number in 1 .. 64; got "
+                                       f"{together!r}")  # fmt: skip
         if int(horizon) != horizon or not 2 <= horizon <= 40:
             raise InvalidArgumentError(
                 f"horizon must be a whole number in 2 .. 40; got {horizon!r}"
@@ -404,6 +413,7 @@ class FuturesPlanner:
         self.discount = float(discount)
         self.margin = float(margin)
         self.escape = float(escape)
+        self.together = int(together)
         self.moves, _ = compass_moves()
         self.no_cost = np.zeros(len(self.moves))
         self.costs = np.full(len(self.moves), np.inf)
@@ -496,7 +506,15 @@ class FuturesPlanner:
             cap = self.horizon + (float(fin.max()) if fin.size else 0.0) + self.loss
             # solved only where the agent can be (the window's centre is its cell; the
             # move's end, read bilinearly, is within 3 cells of it: box 2 keeps 4)
-            V = hindsight_values(samples, radii, self.r, self.margin, wx0, wy0, RES, ok,
+            hs, hr = samples, radii
+            g = self.together
+            if g > 1 and samples.shape[0] % g == 0 and samples.shape[2] > 0:
+                # g futures solved as one: every disc of each, so a way must clear them all
+                S, T1, d, _ = samples.shape
+                hs = np.ascontiguousarray(samples.reshape(S // g, g, T1, d, 2)
+                                          .transpose(0, 2, 1, 3, 4).reshape(S // g, T1, g * d, 2))
+                hr = np.ascontiguousarray(np.tile(radii, g))
+            V = hindsight_values(hs, hr, self.r, self.margin, wx0, wy0, RES, ok,
                                  terminal, goal, OFFSETS, mid_ok, cap, 2)  # fmt: skip
         elif self.plan_kind == "greedy":
             V = np.stack([terminal, terminal])  # step 1's value: the distance to go

@@ -89,9 +89,10 @@ class PredictiveAgent(Agent):
     capabilities : Capabilities
         Learnt with a model of what moves and safety priors (``copi learn --preset
         predictive``).
-    samples, horizon, loss, margin, escape : see :class:`FuturesPlanner` (the model-oracle's
-        settings, but a horizon of 20 steps: the best of six settings on validation seed
-        1, docs/tuning-predictive.md).
+    samples, horizon, loss, margin, escape, together : see :class:`FuturesPlanner`
+        (the model-oracle's settings, but a horizon of 20 steps: the best of six
+        settings on validation seed 1, docs/tuning-predictive.md; each future valued
+        alone, as the model-oracle does).
     alpha, beta : float
         Weights, in steps, of the learnt safety network and of the template priors.
     seed : int

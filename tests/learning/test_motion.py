@@ -11,8 +11,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from numba import njit
 
 from copi.errors import CapabilitiesFormatError, InvalidArgumentError
+from copi.geometry.kernels import sweep_one
 from copi.learning import (
     Capabilities,
     MotionModel,
@@ -22,6 +24,7 @@ from copi.learning import (
     motion_tables,
     sample_motion,
 )
+from copi.learning._motion import _draw, _edge_bin, _speed_in
 from copi.world import RangeSensor, World
 
 
@@ -90,6 +93,65 @@ def test_futures_far_from_walls_skip_the_sweep_and_stay_the_same(model: MotionMo
     assert np.array_equal(fast, swept)
     step = np.hypot(*np.diff(fast, axis=1).transpose(3, 0, 1, 2))
     assert (step < bodies[:, 4] - 1e-6).any()  # walls stopped some moves: both paths ran
+
+
+@njit(cache=False)
+def _every_wall_every_step(bodies, segs, n_samples, horizon, seed, turn_cdf, speed_cdf,  # type: ignore[no-untyped-def]
+                           start_cdf, ahead_edges, speed_edges):  # fmt: skip
+    """sample_motion as its docstring says it, with nothing spared: every body's every
+    step swept against every wall, for the room ahead and for the move."""
+    np.random.seed(seed)
+    d = bodies.shape[0]
+    width = 2.0 * math.pi / turn_cdf.shape[1]
+    out = np.empty((n_samples, horizon + 1, d, 2))
+    for k in range(d):
+        rk = bodies[k, 5]
+        for s in range(n_samples):
+            x, y = bodies[k, 0], bodies[k, 1]
+            if bodies[k, 3] > 0.5:
+                h, v = bodies[k, 2], bodies[k, 4]
+            else:
+                h = 2.0 * math.pi * np.random.random()
+                v = _speed_in(speed_edges, _draw(start_cdf))
+            out[s, 0, k, 0], out[s, 0, k, 1] = x, y
+            for t in range(horizon):
+                room = sweep_one(x, y, math.cos(h), math.sin(h), segs, rk)
+                b = _draw(turn_cdf[_edge_bin(ahead_edges, room)])
+                h += -math.pi + (b + np.random.random()) * width
+                if speed_cdf.shape[0] > 1:
+                    v = _speed_in(speed_edges, _draw(speed_cdf[_edge_bin(speed_edges, v)]))
+                go = sweep_one(x, y, math.cos(h), math.sin(h), segs, rk)
+                step = min(v, max(go - 1e-6, 0.0))
+                x += step * math.cos(h)
+                y += step * math.sin(h)
+                out[s, t + 1, k, 0], out[s, t + 1, k, 1] = x, y
+    return out
+
+
+def test_futures_are_those_of_sweeping_every_wall_every_step(model: MotionModel) -> None:
+    """The walls a body's sweeps test are only those near it (drawn again every few
+    steps), and none where the clearance grid says none is near: the futures are those of
+    sweeping every wall at every step, bit for bit, among many walls (pillars and a long
+    hall), bodies near and far from them, one faster than the model's fastest."""
+    from copi.geometry import clearance
+
+    pillars = [[[x, y], [x + 1, y], [x + 1, y + 1], [x, y + 1]]
+               for x in (4, 9, 14, 19, 24) for y in (3, 8)]  # fmt: skip
+    hall = World([[0, 0], [30, 0], [30, 12], [0, 12]], holes=pillars)
+    segs = np.ascontiguousarray(hall.segments)
+    bodies = np.array([[2.0, 6.0, 0.0, 1.0, 0.8, 0.5], [15.5, 6.0, 1.6, 1.0, 2.5, 0.7],
+                       [27.0, 10.5, 0.0, 0.0, 0.6, 0.4], [11.0, 1.0, 3.0, 1.0, 1.0, 1.0]])  # fmt: skip
+    h = 0.125
+    gy, gx = np.mgrid[0:100, 0:244]
+    pts = np.column_stack([h * gx.ravel(), h * gy.ravel()])
+    clear = np.where(hall.contains(pts), clearance(pts, segs), 0.0).reshape(100, 244)
+    tables = motion_tables(model)
+    for seed in (1, 2):
+        fast = sample_motion(bodies, segs, 32, 30, seed, *tables, clear, 0.0, 0.0, h)
+        naive = _every_wall_every_step(bodies, segs, 32, 30, seed, *tables[:5])
+        assert np.array_equal(fast, naive)
+    step = np.hypot(*np.diff(fast, axis=1).transpose(3, 0, 1, 2))
+    assert (step < 0.3).mean() > 0.01  # walls stopped moves: the sweeps mattered
 
 
 def test_a_circle_fit_agrees_with_scipys_least_squares() -> None:

@@ -280,6 +280,10 @@ def _speed_in(speed_edges, b):  # type: ignore[no-untyped-def]
     return speed_edges[b] + np.random.random() * (speed_edges[b + 1] - speed_edges[b])
 
 
+_REFRESH = 4
+"""Steps between two draws of the walls near a body in :func:`sample_motion`."""
+
+
 @njit(cache=True, nogil=True)  # nogil: many agents draw at once in threads
 def sample_motion(  # type: ignore[no-untyped-def]
     bodies, segs, n_samples, horizon, seed, turn_cdf, speed_cdf, start_cdf, ahead_edges,
@@ -302,12 +306,20 @@ def sample_motion(  # type: ignore[no-untyped-def]
     slack = ch * 0.7072
     out = np.empty((n_samples, horizon + 1, d, 2))
     width = 2.0 * math.pi / n_turn
+    # A wall counts for a body only within ``near`` of it: farther than the last bin's
+    # edge of the room ahead (beyond it every room falls in that bin) and than a step
+    # (what may stop the move), with the way it may go before the set is drawn again,
+    # every _REFRESH steps; so each sweep tests a few walls, not all within the horizon,
+    # and the futures are the same to the bit.
+    room_far = ahead_edges[ahead_edges.shape[0] - 2]
     for k in range(d):
         x0 = bodies[k, 0]
         y0 = bodies[k, 1]
         rk = bodies[k, 5]
         known = bodies[k, 3] > 0.5
-        local = local_segments(x0, y0, segs, horizon * speed_edges[-1] + rk + 1e-3)
+        vmax = max(speed_edges[-1], bodies[k, 4]) if known else speed_edges[-1]
+        near = max(room_far, vmax) + rk + _REFRESH * vmax + 1e-3
+        around = local_segments(x0, y0, segs, horizon * vmax + near)
         for s in range(n_samples):
             x = x0
             y = y0
@@ -319,14 +331,17 @@ def sample_motion(  # type: ignore[no-untyped-def]
                 v = _speed_in(speed_edges, _draw(start_cdf))
             out[s, 0, k, 0] = x
             out[s, 0, k, 1] = y
+            local = around
             for t in range(horizon):
                 ci = int(math.floor((y - cy0) / ch + 0.5))
                 cj = int(math.floor((x - cx0) / ch + 0.5))
                 # how far every wall is at least (the grid's cell centre's clearance, less
                 # the most a point of the cell can be nearer)
                 far = clear[ci, cj] - slack if 0 <= ci < cny and 0 <= cj < cnx else -1.0
+                if t % _REFRESH == 0 and not far > near:
+                    local = local_segments(x, y, around, near)
                 room = 1e3
-                if not far > 4.0 + rk:
+                if not far > room_far + rk:
                     room = sweep_one(x, y, math.cos(h), math.sin(h), local, rk)
                 b = _draw(turn_cdf[_edge_bin(ahead_edges, room)])
                 h += -math.pi + (b + np.random.random()) * width

@@ -78,7 +78,8 @@ def test_it_waits_rather_than_walk_into_a_body_crossing_its_way(predictive_caps:
 def test_at_sensor_a_hit_where_its_rays_passed_is_what_moves(predictive_caps: Path) -> None:
     """Level sensor: a hit in cells its rays passed through before is something that
     moved there (unexplained, for the tracker); hits where rays always stopped are walls,
-    neighbours joined into segments; it places itself at minus the relative goal."""
+    neighbours joined into segments, and the walls it has learnt by seeing them again
+    and again are kept as points; it places itself at minus the relative goal."""
     from copi.core import Observation
     from copi.runs import make_task
     from copi.world import Simulator, World
@@ -101,6 +102,13 @@ def test_at_sensor_a_hit_where_its_rays_passed_is_what_moves(predictive_caps: Pa
     ends = segs.reshape(-1, 2, 2) - p
     assert np.allclose(np.hypot(*ends.reshape(-1, 2).T), 5.0)  # only the ring's hits
     assert len(segs) == (n - 2) + (n - 1)  # neighbours joined, and each hit itself
+    assert len(agent._remembered(p)) == 0  # seen twice: not learnt yet
+    for _ in range(25):  # the same walls, again and again: learnt, and kept as walls
+        p, static, segs = agent.sees(Observation(ranges=ring, goal=goal))
+    kept = agent._remembered(p)
+    assert len(kept) > n and np.allclose(kept[:, :2], kept[:, 2:])  # points
+    assert np.all(np.abs(np.hypot(*(kept[:, :2] - p).T) - 5.0) < 0.8)  # the ring's cells
+    assert any(np.allclose(row, k) for k in kept for row in segs)  # among the walls
 
 
 def test_a_small_group_of_hits_moves_together_a_wall_does_not() -> None:

@@ -171,7 +171,7 @@ def _register_builtins() -> None:
         summary="plans its move over futures of what moves drawn from its learnt model "
         "(learnt once from its own task-free walks; the planner is the model-oracle's), each "
         "move also costed by the learnt safety network; no hand-written guard (also at "
-        "`sensor`, on the walls it sees: copi-predictive@sensor)")
+        "`sensor`, on the walls it sees and has learnt: copi-predictive@sensor)")
     reg("copi-predictive-contexts", PredictiveAgent, capabilities="predictive", sensing="map",
         ablation=True, params={"beta": 0.5},
         summary="copi-predictive whose moves also cost what the recognised context's template "

@@ -16,8 +16,9 @@ At level ``sensor`` (no map, no position) the agent places itself in the goal's 
 hit in a cell its rays have passed through more than they stopped in (the occupancy grid
 of :class:`~copi.online.Mapping`) is something that moved there; the other hits are
 walls, joined into segments where neighbouring rays' hits are close, and so are the
-walls it has learnt on that grid (cells hit again and again). It plans each step in a box
-around itself whose only walls are those, unknown space taken as free.
+walls it has learnt on that grid (cells hit four times more than passed through). It
+plans each step in a box around itself whose only walls are those, unknown space taken
+as free.
 """
 
 from __future__ import annotations
@@ -223,17 +224,19 @@ class PredictiveAgent(Agent):
         return p, static, np.vstack([segs, self._remembered(p)])
 
     def _remembered(self, p: NDArray[np.float64]) -> NDArray[np.float64]:
-        """The learnt walls of what it has seen (:class:`Mapping`'s: cells hit again and
-        again, and rays stopped there more than they passed) in the planner's box around
-        ``p``, as points at the cells' centres."""
+        """The walls it has learnt on its grid in the planner's box around ``p``, as
+        points at the cells' centres: the cells whose occupancy is ``Mapping.wall_level``
+        or more (hit four times more than rays passed through them; not also hit
+        ``Mapping.wall_hits`` times in all, as the mapping strategy asks before it
+        hands a wall on as static: on validation seed 1, 151 successes of 240 against
+        141)."""
         seen = self.seen
         assert seen is not None
         reach = (self.planner.half + 3) * 0.5
         lo = seen._index((p - reach)[None])[0]
         hi = seen._index((p + reach)[None])[0]
         occ = seen.occupancy[lo[1] : hi[1] + 1, lo[0] : hi[0] + 1]
-        hits = seen.hits[lo[1] : hi[1] + 1, lo[0] : hi[0] + 1]
-        iy, ix = np.nonzero((occ >= seen.wall_level) & (hits >= seen.wall_hits))
+        iy, ix = np.nonzero(occ >= seen.wall_level)
         c = seen._centre(np.column_stack([ix + lo[0], iy + lo[1]]))
         return np.hstack([c, c]).reshape(-1, 4)
 

@@ -24,6 +24,21 @@ def test_plain_progress_prints_done_rate_and_eta(capsys: pytest.CaptureFixture[s
     assert lines[-1].startswith("episodes: 4/4 (100 %), ") and "ETA" not in lines[-1]
 
 
+def test_a_resumed_run_counts_its_rate_from_where_it_resumed(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """600 of 1000 done before: 10 done in 2 s is 5/s and 78 s to go, not 305/s."""
+    clock = iter([0.0] * 4 + [2.0] * 4)
+    monkeypatch.setattr(_common.time, "monotonic", lambda: next(clock))
+    with PlainProgress(every=0.0) as bar:
+        task = bar.add_task("episodes", total=1000)
+        bar.update(task, completed=600, resumed=True)
+        bar.update(task, completed=610)
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert lines[0] == "episodes: 600/1000 (60 %), elapsed 0s", lines
+    assert lines[1] == "episodes: 610/1000 (61 %), 5.0/s, ETA 1m18s, elapsed 2s", lines
+
+
 def test_a_non_tty_run_prints_progress_lines(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -101,7 +101,7 @@ class PlainProgress:
         now = time.monotonic()
         self._tasks.append(
             {"label": description, "total": total, "done": 0.0, "start": now,
-             "last": now, "printed": None}
+             "last": now, "printed": None, "base": 0.0}
         )  # fmt: skip
         return TaskID(len(self._tasks) - 1)
 
@@ -112,13 +112,19 @@ class PlainProgress:
         completed: float | None = None,
         advance: float | None = None,
         total: float | None = None,
+        resumed: bool = False,
         **_: Any,
     ) -> None:
+        """``resumed``: ``completed`` was done before this run (a resumed store), so the
+        rate and the time left count only what is done from here."""
         task = self._tasks[task_id]
         if total is not None:
             task["total"] = total
         if completed is not None:
             task["done"] = completed
+            if resumed:
+                task["base"] = completed
+                task["start"] = time.monotonic()
         if advance is not None:
             task["done"] += advance
         now = time.monotonic()
@@ -133,11 +139,11 @@ class PlainProgress:
         now = time.monotonic()
         done, total = task["done"], task["total"]
         elapsed = now - task["start"]
-        rate = done / elapsed if elapsed > 0 else math.nan
+        rate = (done - task["base"]) / elapsed if elapsed > 0 else math.nan
         parts = [f"{task['label']}: {done:g}"]
         if total:
             parts[0] += f"/{total:g} ({100 * done / total:.0f} %)"
-        if done and math.isfinite(rate):
+        if done > task["base"] and math.isfinite(rate):
             parts.append(
                 f"{rate:,.0f}/s" if rate >= 100 else f"{rate:.1f}/s" if rate >= 1
                 else f"{1 / rate:.1f} s each"
@@ -185,7 +191,17 @@ def _with_progress(label: str, total: int, run: Callable[[Callable[[int, int], N
     """``run(report)`` under a progress display that ``report(done, total)`` advances."""
     with progress() as bar:
         task = bar.add_task(label, total=total)
-        return run(lambda done, _total: bar.update(task, completed=done))
+        first = True
+
+        def report(done: int, _total: int) -> None:
+            nonlocal first  # a first report of work done: done before this run, resumed
+            if first and done and isinstance(bar, PlainProgress):
+                bar.update(task, completed=done, resumed=True)
+            else:  # a bar shows no rate
+                bar.update(task, completed=done)
+            first = False
+
+        return run(report)
 
 
 # numba kernels (a dispatcher each module calls first) and their compile time, seconds,

@@ -38,7 +38,7 @@ from copi.learning import Capabilities, MotionTracker, motion_tables, sample_mot
 from copi.learning.kernels import kernel_net, safety_probabilities
 from copi.online._learnt import node_priors
 from copi.online._mapping import Mapping
-from copi.planning.futures import FuturesPlanner
+from copi.planning.futures import RES, FuturesPlanner
 
 __all__ = ["PredictiveAgent"]
 
@@ -232,7 +232,7 @@ class PredictiveAgent(Agent):
         141)."""
         seen = self.seen
         assert seen is not None
-        reach = (self.planner.half + 3) * 0.5
+        reach = (self.planner.half + 3) * RES  # reset_open's box
         lo = seen._index((p - reach)[None])[0]
         hi = seen._index((p + reach)[None])[0]
         occ = seen.occupancy[lo[1] : hi[1] + 1, lo[0] : hi[0] + 1]

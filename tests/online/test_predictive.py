@@ -60,9 +60,13 @@ def test_it_keeps_the_agent_contract(predictive_caps: Path) -> None:
     check_agent(lambda: PredictiveAgent(caps), episodes=2)
 
 
-def test_it_waits_rather_than_walk_into_a_body_crossing_its_way(predictive_caps: Path) -> None:
+@pytest.mark.parametrize("level", ["map", "sensor"])
+def test_it_waits_rather_than_walk_into_a_body_crossing_its_way(
+    predictive_caps: Path, level: str
+) -> None:
     """A corridor; a body crossing it just ahead: the futures say where it will be, and the
-    agent lets it pass (no contact), then goes on to the goal."""
+    agent lets it pass (no contact), then goes on to the goal. At level sensor too (no
+    map, no position): the bodies are told from walls by the agent's own readings."""
     from copi.world import ObstacleSpec, Simulator, World
 
     caps = Capabilities.load(predictive_caps)
@@ -70,7 +74,7 @@ def test_it_waits_rather_than_walk_into_a_body_crossing_its_way(predictive_caps:
     outcomes = []
     for seed in range(4):
         sim = Simulator.from_world(hall, seed, obstacles=ObstacleSpec(count=(3, 3), speed=0.6))
-        outcomes.append(run_episode(PredictiveAgent(caps), sim, sensing="map",
+        outcomes.append(run_episode(PredictiveAgent(caps), sim, sensing=level,
                                     max_steps=200).outcome)  # fmt: skip
     assert outcomes.count("success") >= 3, outcomes
 
@@ -127,21 +131,6 @@ def test_a_small_group_of_hits_moves_together_a_wall_does_not() -> None:
     moved[[4, 18]] = True
     out = _whole_bodies(hit, ends, moved)
     assert out[3:6].all() and out[18] and out.sum() == 4
-
-
-def test_at_sensor_it_lets_a_body_crossing_its_way_pass(predictive_caps: Path) -> None:
-    """The corridor of the map-level test, at level sensor: no map, no position; the
-    bodies are told from walls by the agent's own readings."""
-    from copi.world import ObstacleSpec, Simulator, World
-
-    caps = Capabilities.load(predictive_caps)
-    hall = World([[0, 0], [30, 0], [30, 12], [0, 12]], start=[3, 6], goal=[27, 6])
-    outcomes = []
-    for seed in range(4):
-        sim = Simulator.from_world(hall, seed, obstacles=ObstacleSpec(count=(3, 3), speed=0.6))
-        outcomes.append(run_episode(PredictiveAgent(caps), sim, sensing="sensor",
-                                    max_steps=200).outcome)  # fmt: skip
-    assert outcomes.count("success") >= 3, outcomes
 
 
 def test_what_it_cannot_run_on_is_one_line(

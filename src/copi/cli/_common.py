@@ -195,10 +195,7 @@ def _with_progress(label: str, total: int, run: Callable[[Callable[[int, int], N
 
         def report(done: int, _total: int) -> None:
             nonlocal first  # a first report of work done: done before this run, resumed
-            if first and done and isinstance(bar, PlainProgress):
-                bar.update(task, completed=done, resumed=True)
-            else:  # a bar shows no rate
-                bar.update(task, completed=done)
+            bar.update(task, completed=done, resumed=first and done > 0)  # (a bar: a field)
             first = False
 
         return run(report)

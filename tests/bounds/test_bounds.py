@@ -288,6 +288,34 @@ def test_hindsight_values_equal_a_shortest_path_per_sampled_future(seed: int,
         assert not np.isfinite(part[~inner]).any()
 
 
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_hindsight_values_solved_where_the_agent_can_be_are_the_whole_windows(seed: int) -> None:
+    """On a window as large as the planner's far ahead (41 cells, 14 steps), the values
+    solved only on the octagon step 1's square depends on (``box`` 2) are the whole
+    window's bit for bit, with walls, goals and discs crossing the octagon's edges (an
+    octagon cut one cell too small reads values never solved, and fails)."""
+    rng = np.random.default_rng(seed)
+    n, horizon, res = 41, 14, 0.5
+    ok = rng.random((n, n)) > 0.1
+    mid_ok = rng.random((len(_OFFSETS), n, n)) > 0.05
+    mid_ok[0] = True
+    terminal = np.where(ok, rng.uniform(0, 15, (n, n)), math.inf)
+    goal = np.zeros((n, n), dtype=bool)
+    goal[rng.integers(n, size=3), rng.integers(n, size=3)] = True
+    terminal[goal] = 0.0
+    start = rng.uniform(0, res * (n - 1), (1, 1, 12, 2))
+    samples = np.ascontiguousarray(start + rng.normal(0, 0.5, (20, horizon + 1, 12, 2))
+                                   .cumsum(axis=1))  # fmt: skip
+    radii = rng.uniform(0.3, 0.8, 12)
+    whole = hindsight_values(samples, radii, 0.3, 0.1, 0.0, 0.0, res, ok, terminal, goal,
+                             _OFFSETS, mid_ok, 60.0)[1]  # fmt: skip
+    part = hindsight_values(samples, radii, 0.3, 0.1, 0.0, 0.0, res, ok, terminal, goal,
+                            _OFFSETS, mid_ok, 60.0, 2)[1]  # fmt: skip
+    c = n // 2
+    np.testing.assert_array_equal(part[c - 4 : c + 5, c - 4 : c + 5],
+                                  whole[c - 4 : c + 5, c - 4 : c + 5])  # fmt: skip
+
+
 def test_hindsight_values_with_no_disc_solve_one_future_and_count_it_for_all() -> None:
     """With no disc every sampled future is the same: the kernel solves one and counts it
     for each; the values are networkx's, and bit for bit those of the same futures with a

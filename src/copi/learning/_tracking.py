@@ -139,9 +139,14 @@ def detect_discs(
         behind = s[mid]  # the centre lies beyond the middle hit
         best: tuple[NDArray[np.float64], float, float] | None = None
         short = float(np.mean(radii_seen)) if radii_seen else 0.75
+        pts = hits[arc]  # finite, (k, 2): the compiled fit is called without fit_circle's checks
         for r in RADII if len(arc) >= WELL else (short,):
             c0 = hits[mid] + r * unit[mid]
-            c, err = fit_circle(hits[arc], r, c0) if len(arc) > 1 else (c0, 0.0)
+            if len(arc) > 1:
+                cx, cy, err = _fit_circle(pts, r, c0[0], c0[1])
+                c = np.array([cx, cy])
+            else:
+                c, err = c0, 0.0
             if math.dist(c, position) < behind:
                 c, err = c0, math.inf
             if best is None or err < best[2] - 1e-9:
@@ -217,6 +222,7 @@ class MotionTracker:
         self._tracks: list[dict[str, Any]] = []
         # what its tracks measured: displacements, heading changes, radii
         self._speeds: list[float] = []
+        self._speed_at = (-1, 0.0)  # (displacements counted, their median)
         self._turns: list[float] = []
         self._radii: list[float] = []
         self._radius = np.zeros(0)
@@ -228,9 +234,12 @@ class MotionTracker:
     @property
     def speed(self) -> float:
         """The bodies' speed per step: estimated once 5 displacements were measured."""
-        if len(self._speeds) < MIN_SPEED_SAMPLES:
+        k = len(self._speeds)
+        if k < MIN_SPEED_SAMPLES:
             return self.prior_speed
-        return float(np.median(self._speeds))
+        if self._speed_at[0] != k:  # the median again only when a displacement came in
+            self._speed_at = (k, float(np.median(self._speeds)))
+        return self._speed_at[1]
 
     @property
     def turn_sd(self) -> float:

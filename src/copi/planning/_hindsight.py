@@ -80,10 +80,13 @@ def hindsight_values(  # type: ignore[no-untyped-def]
     it assumes the agent will see each future as it comes, which is optimistic (it will see
     it a step at a time), where the mean-occupancy plan is pessimistic.
 
-    ``box`` >= 0: only the cells an agent starting at the window's centre can be in are
-    solved, those within ``box`` + 2 t cells of the centre at step t (a move goes at most
-    2 cells: ``offsets``); the values there are those of the whole window, the rest of
-    step 1 is left infinite. ``box`` < 0: the whole window.
+    ``box`` >= 0: only the cells step 1's values within ``box`` + 2 cells of the centre
+    (the square an agent starting there can be in) depend on are solved: at step t,
+    those within ``box`` + 2 + p (t - 1) cells of the centre in each axis and 2 (``box``
+    + 2) + q (t - 1) in the sum of both, where a move of ``offsets`` goes at most p cells
+    in either axis and q in their sum (2 and 2 for the planner's): an octagon, about
+    two thirds of its square far ahead. The values there are those of the
+    whole window; the rest of step 1 is left infinite. ``box`` < 0: the whole window.
 
     The samples are solved :data:`_LANES` at a time, stored sample-last (lane s of cell
     (i, j)) in a grid padded by the longest move's reach: each cell's moves are tested for
@@ -100,9 +103,11 @@ def hindsight_values(  # type: ignore[no-untyped-def]
     if box >= 0:
         lo1 = max(c - box - 2, 0)
         hi1 = min(c + box + 2, n - 1)
-    pad = 0
+    pad = 0  # the farthest a move goes in either axis, cells
+    l1 = 0  # and in the sum of both
     for o in range(n_off):
         pad = max(pad, abs(offsets[o, 0]), abs(offsets[o, 1]))
+        l1 = max(l1, abs(offsets[o, 0]) + abs(offsets[o, 1]))
     m = n + 2 * pad
     total = np.zeros((n, n))
     L = _LANES
@@ -127,10 +132,16 @@ def hindsight_values(  # type: ignore[no-untyped-def]
         for t in range(horizon - 1, 0, -1):
             lo, hi = 0, n - 1
             if box >= 0:
-                lo = max(c - box - 2 * t, 0)
-                hi = min(c + box + 2 * t, n - 1)
+                lo = max(c - box - 2 - pad * (t - 1), 0)
+                hi = min(c + box + 2 + pad * (t - 1), n - 1)
             for i in range(lo, hi + 1):
-                for j in range(lo, hi + 1):
+                jlo, jhi = lo, hi
+                if box >= 0:  # the octagon
+                    span = min(box + 2 + pad * (t - 1),
+                               2 * (box + 2) + l1 * (t - 1) - abs(i - c))
+                    jlo = max(c - span, 0)
+                    jhi = min(c + span, n - 1)
+                for j in range(jlo, jhi + 1):
                     base = ((pad + i) * m + pad + j) * L
                     if not ok[i, j]:
                         for s in range(L):

@@ -49,9 +49,10 @@ class DiscTracker(MotionTracker):
     """
 
     def __init__(
-        self, n_rays: int, max_range: float, *, speed: float = 0.7, turn_sd: float = 1.0
+        self, n_rays: int, max_range: float, *, speed: float = 0.7, turn_sd: float = 1.0,
+        split: bool = False,
     ) -> None:
-        super().__init__(n_rays, max_range, speed=speed, turn_sd=turn_sd)
+        super().__init__(n_rays, max_range, speed=speed, turn_sd=turn_sd, split=split)
 
 
 class TrackedMPC(ModelOracle):
@@ -75,6 +76,9 @@ class TrackedMPC(ModelOracle):
         (:class:`DiscTracker`); deliberately not the simulator's values (0.6 or 0.8, 0.6).
         On 200 validation crowd episodes (seed 1) a prior turn spread of 0.6 instead of
         1.0 changes 94 successes to 95.
+    split : bool
+        Cut an arc of hits one circle fits badly into several discs
+        (:func:`copi.learning.detect_discs`).
     samples, horizon, plan, loss, margin, escape, seed
         The planner's, as :class:`copi.bounds.ModelOracle`'s.
     """
@@ -93,6 +97,7 @@ class TrackedMPC(ModelOracle):
         loss: float = 200.0,
         margin: float = 0.1,
         escape: float = 0.1,
+        split: bool = False,
         seed: int = 0,
     ) -> None:
         super().__init__(samples=samples, horizon=horizon, plan=plan, loss=loss,
@@ -100,11 +105,12 @@ class TrackedMPC(ModelOracle):
         _check_positive(speed=speed, turn_sd=turn_sd)
         self.prior_speed = float(speed)
         self.prior_turn_sd = float(turn_sd)
+        self.split = bool(split)
 
     def reset(self, task: Task) -> None:
         super().reset(task)
         self.tracker = DiscTracker(task.n_rays, task.max_range, speed=self.prior_speed,
-                                   turn_sd=self.prior_turn_sd)  # fmt: skip
+                                   turn_sd=self.prior_turn_sd, split=self.split)  # fmt: skip
         self._seen: list[int] = []
 
     def act(self, obs: Observation) -> NDArray[np.float64]:

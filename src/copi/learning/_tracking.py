@@ -20,6 +20,7 @@ __all__ = ["JOIN", "MAD", "RADII", "WELL", "MotionTracker", "detect_discs", "fit
 
 RADII = (0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0)
 """Radii tried on an arc of :data:`WELL` rays or more."""
+_RADII = np.array(RADII)
 JOIN = 0.8
 """Neighbouring hits farther apart than this belong to different bodies."""
 WELL = 3
@@ -99,6 +100,89 @@ def _fit_circle(pts, r, cx, cy):  # type: ignore[no-untyped-def]
     return cx, cy, err / k
 
 
+SPLIT_BAD, SPLIT_COST = 0.01, 0.05
+"""``split``: an arc whose one circle leaves a mean squared residual above ``SPLIT_BAD``
+is cut into the runs of rays that fit circles best, each run costing its squared
+residuals plus ``SPLIT_COST`` (a run too short for its own fit, 1.5 times that)."""
+
+
+@njit(cache=True)
+def _piece(hits, s, unit, px, py, radii, short, a, b):  # type: ignore[no-untyped-def]
+    """The circle of the rays a..b of an arc (hits, ranges ``s``, directions ``unit``),
+    as :func:`detect_discs` fits one arc: (cx, cy, radius, mean squared residual; inf
+    when every fit put the centre before the middle hit)."""
+    k = b - a + 1
+    mid = a + k // 2
+    behind = s[mid]
+    best_c = (0.0, 0.0)
+    best_r = short
+    best_e = np.inf
+    first = True
+    n_r = radii.shape[0] if k >= WELL else 1
+    for q in range(n_r):
+        r = radii[q] if k >= WELL else short
+        c0x = hits[mid, 0] + r * unit[mid, 0]
+        c0y = hits[mid, 1] + r * unit[mid, 1]
+        if k > 1:
+            cx, cy, err = _fit_circle(hits[a : b + 1], r, c0x, c0y)
+        else:
+            cx, cy, err = c0x, c0y, 0.0
+        if math.sqrt((cx - px) ** 2 + (cy - py) ** 2) < behind:
+            cx, cy, err = c0x, c0y, np.inf
+        if first or err < best_e - 1e-9:
+            best_c = (cx, cy)
+            best_r = r
+            best_e = err
+            first = False
+    return best_c[0], best_c[1], best_r, best_e
+
+
+@njit(cache=True)
+def _split_arc(hits, s, unit, px, py, radii, short, cost):  # type: ignore[no-untyped-def]
+    """The arc's rays cut into runs, one body each, of least total cost (the sum over
+    runs of the squared residuals of the run's circle, :func:`_piece`, plus ``cost``;
+    1.5 ``cost`` for a run shorter than :data:`WELL`): by dynamic programming over the
+    cut points, every run's circle fitted once. Returns rows (first ray, last ray, cx,
+    cy, radius). Written out and compiled: an arc of L rays has L (L + 1) / 2 runs, each
+    fitted with seven radii."""
+    L = hits.shape[0]
+    fit = np.empty((L, L, 4))
+    for a in range(L):
+        for b in range(a, L):
+            cx, cy, r, err = _piece(hits, s, unit, px, py, radii, short, a, b)
+            fit[a, b, 0] = cx
+            fit[a, b, 1] = cy
+            fit[a, b, 2] = r
+            k = b - a + 1
+            sse = err * k if err < np.inf else 1e9
+            fit[a, b, 3] = sse + (cost if k >= WELL else 1.5 * cost)
+    best = np.full(L + 1, np.inf)
+    best[0] = 0.0
+    prev = np.zeros(L + 1, dtype=np.int64)
+    for b in range(1, L + 1):
+        for a in range(b):
+            c = best[a] + fit[a, b - 1, 3]
+            if c < best[b]:
+                best[b] = c
+                prev[b] = a
+    n = 0
+    b = L
+    while b > 0:
+        n += 1
+        b = prev[b]
+    out = np.empty((n, 5))
+    b = L
+    i = n - 1
+    while b > 0:
+        a = prev[b]
+        out[i, 0] = a
+        out[i, 1] = b - 1
+        out[i, 2:] = fit[a, b - 1, :3]
+        i -= 1
+        b = a
+    return out
+
+
 def detect_discs(
     ranges: NDArray[np.float64],
     static: NDArray[np.float64],
@@ -106,6 +190,7 @@ def detect_discs(
     unit: NDArray[np.float64],
     max_range: float,
     radii_seen: list[float],
+    split: bool = False,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
     """The moving bodies of one reading: centres (k, 2), radii (k,) and the rays on each.
 
@@ -114,7 +199,12 @@ def detect_discs(
     one). An arc of :data:`WELL` rays or more is fitted by a circle (each radius of
     :data:`RADII` tried, the best fit kept; its radius is appended to ``radii_seen``);
     a shorter one is taken for a body of the mean radius seen so far (0.75 before any)
-    behind its middle hit. ``unit``: the rays' directions (n_rays, 2)."""
+    behind its middle hit. ``unit``: the rays' directions (n_rays, 2).
+
+    ``split``: an arc of 2 :data:`WELL` - 1 rays or more that one circle fits badly (a
+    mean squared residual above :data:`SPLIT_BAD`: discs side by side, their hits less
+    than :data:`JOIN` apart) is cut into the runs of rays that circles fit best
+    (:data:`SPLIT_COST`), one body each."""
     s, st = ranges, static
     n = len(s)
     hits = position + s[:, None] * unit
@@ -133,7 +223,7 @@ def detect_discs(
     if (len(arcs) > 1 and arcs[0][0] == 0 and arcs[-1][-1] == n - 1
             and math.dist(hits[0], hits[n - 1]) < JOIN):  # fmt: skip
         arcs[0] = arcs.pop() + arcs[0]  # the arc across ray 0
-    centres, radii = [], []
+    centres, radii, rays = [], [], []
     for arc in arcs:
         mid = arc[len(arc) // 2]
         behind = s[mid]  # the centre lies beyond the middle hit
@@ -152,12 +242,24 @@ def detect_discs(
             if best is None or err < best[2] - 1e-9:
                 best = (c, r, err)
         assert best is not None
+        if split and len(arc) >= 2 * WELL - 1 and best[2] > SPLIT_BAD:
+            runs = _split_arc(pts, np.ascontiguousarray(s[arc]), np.ascontiguousarray(unit[arc]),
+                              float(position[0]), float(position[1]), _RADII, short,
+                              SPLIT_COST)  # fmt: skip
+            for a, b, cx, cy, r in runs:
+                centres.append(np.array([cx, cy]))
+                radii.append(float(r))
+                rays.append(int(b - a + 1))
+                if b - a + 1 >= WELL:
+                    radii_seen.append(float(r))
+            continue
         centres.append(best[0])
         radii.append(best[1])
+        rays.append(len(arc))
         if len(arc) >= WELL:
             radii_seen.append(best[1])
-    return (np.array(centres), np.array(radii),
-            np.array([len(a) for a in arcs], dtype=np.int64))  # fmt: skip
+    return (np.array(centres).reshape(-1, 2), np.array(radii),
+            np.array(rays, dtype=np.int64))  # fmt: skip
 
 
 MIN_SPEED_SAMPLES = 5
@@ -185,6 +287,9 @@ class MotionTracker:
     the static map), every body followed over three well-measured readings whose match
     had no other candidate is an example of how bodies move, kept in :attr:`examples`.
 
+    With ``split``, an arc one circle fits badly is cut into several bodies
+    (:func:`detect_discs`).
+
     Examples
     --------
     >>> from copi.world import RangeSensor, World
@@ -206,6 +311,7 @@ class MotionTracker:
         speed: float = 0.7,
         turn_sd: float = 1.0,
         ahead: Callable[[NDArray[np.float64], float, float], float] | None = None,
+        split: bool = False,
     ) -> None:
         for key, v in (("speed", speed), ("turn_sd", turn_sd), ("max_range", max_range)):
             if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
@@ -219,6 +325,7 @@ class MotionTracker:
         self.prior_speed = float(speed)
         self.prior_turn_sd = float(turn_sd)
         self.ahead = ahead
+        self.split = bool(split)
         self._tracks: list[dict[str, Any]] = []
         # what its tracks measured: displacements, heading changes, radii
         self._speeds: list[float] = []
@@ -261,7 +368,7 @@ class MotionTracker:
                 f"{st.shape}"
             )
         pos = np.asarray(position, dtype=np.float64)
-        return detect_discs(s, st, pos, self._unit, self.max_range, self._radii)
+        return detect_discs(s, st, pos, self._unit, self.max_range, self._radii, self.split)
 
     def update(
         self, ranges: NDArray[np.float64], static: NDArray[np.float64], position: Any

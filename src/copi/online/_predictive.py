@@ -97,6 +97,9 @@ class PredictiveAgent(Agent):
         alone, as the model-oracle does).
     alpha, beta : float
         Weights, in steps, of the learnt safety network and of the template priors.
+    split : bool
+        Cut an arc of hits one circle fits badly into several bodies
+        (:func:`copi.learning.detect_discs`; docs/predictive-failures.md measures it).
     seed : int
         Seeds the futures drawn (the same episode, the same moves).
     """
@@ -117,6 +120,7 @@ class PredictiveAgent(Agent):
         margin: float = 0.1,
         escape: float = 0.1,
         together: int = 1,
+        split: bool = False,
         seed: int = 0,
     ) -> None:
         if capabilities.motion_model is None or capabilities.safety is None:
@@ -139,6 +143,7 @@ class PredictiveAgent(Agent):
         self.alpha = float(alpha)
         self.beta = float(beta)
         self.seed = int(seed)
+        self.split = bool(split)
         self.model = capabilities.motion_model
         self._tables = motion_tables(self.model)
         self._net = kernel_net(capabilities.safety.net)
@@ -174,7 +179,7 @@ class PredictiveAgent(Agent):
                                float(task.agent_radius), float(task.goal_tolerance))  # fmt: skip
         prior = self.model.priors()  # learnt, where a hand-written tracker sets its own
         self.tracker = MotionTracker(task.n_rays, task.max_range, speed=prior["speed"],
-                                     turn_sd=prior["turn_sd"])  # fmt: skip
+                                     turn_sd=prior["turn_sd"], split=self.split)  # fmt: skip
         self.rng = np.random.default_rng(self.seed)
         self._prev: NDArray[np.float64] | None = None
         self._bodies: list[int] = []
@@ -268,7 +273,7 @@ class PredictiveAgent(Agent):
         move = np.zeros(2) if m < 0 else pl.moves[m].copy()
         if self.explain:  # for copi watch: the futures it expected and what it chose
             self.last_explained = {"bodies": bodies.copy(), "futures": futures[:8].copy(),
-                                   "move": move, "costs": pl.costs.copy(),
+                                   "move": move, "costs": pl.costs.copy(), "lost": pl.lost.copy(),
                                    "extra": extra.copy(), "risk": risk,
                                    "waits": m == len(pl.moves) - 1}  # fmt: skip
         return move

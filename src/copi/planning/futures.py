@@ -260,7 +260,7 @@ def window(ok, mid_ok, terminal, goal, i0, j0, n):  # type: ignore[no-untyped-de
 @njit(cache=True, nogil=True)  # nogil: many agents plan at once in threads
 def escape_move(  # type: ignore[no-untyped-def]
     px, py, gx, gy, tol, r, segs, samples, radii, moves, margin, escape_margin, V, x0, y0,
-    res, loss, dist, fx0, fy0, fh, extra, costs,
+    res, loss, dist, fx0, fy0, fh, extra, costs, lost_share,
 ):
     """The first move of least expected cost, counting as lost each sample in which the
     move is in contact, or leaves no second move clear of that sample's next step by
@@ -268,7 +268,8 @@ def escape_move(  # type: ignore[no-untyped-def]
     where they go next: the margin stands for that). Cost: ``loss`` times the share
     lost, plus one step, plus the window's value ``V`` (step 1) after the move, plus
     ``extra[m]`` (a cost of the move's own: zeros for the oracle); each move's cost goes
-    into ``costs[m]`` (inf for one a wall stops). Returns (move, cost, share of samples the
+    into ``costs[m]`` (inf for one a wall stops) and the share of samples it is lost in
+    into ``lost_share[m]`` (NaN for one a wall stops). Returns (move, cost, share of samples the
     move is in contact with)."""
     n_s = samples.shape[0]
     d = samples.shape[2]
@@ -289,6 +290,7 @@ def escape_move(  # type: ignore[no-untyped-def]
     best_hit = 1.0
     for m in range(n_m):
         costs[m] = np.inf
+        lost_share[m] = np.nan
         dx = moves[m, 0]
         dy = moves[m, 1]
         length = math.sqrt(dx * dx + dy * dy)
@@ -321,6 +323,7 @@ def escape_move(  # type: ignore[no-untyped-def]
             if not escapes(qx, qy, r, moves, free2, samples[s, 1], samples[s, 2], radii, near,
                            n_near, margin + escape_margin):  # fmt: skip
                 lost += 1
+        lost_share[m] = lost / n_s
         cost = loss * lost / n_s + 1.0 + extra[m]
         if not done:
             v = _interp(V[1], x0, y0, res, qx, qy)
@@ -418,6 +421,9 @@ class FuturesPlanner:
         self.no_cost = np.zeros(len(self.moves))
         self.costs = np.full(len(self.moves), np.inf)
         """Each move's expected cost at the last plan (inf: a wall stops it), steps."""
+        self.lost = np.full(len(self.moves), np.nan)
+        """Each move's share of futures lost at the last plan (in contact on its step, or
+        with no second move clear: NaN where a wall stops it)."""
         # the window: as far as the horizon's steps go (greedy: the first move's reach)
         self.half = (int(math.ceil(self.horizon / RES)) if plan != "greedy" else 2) + 1
 
@@ -527,5 +533,6 @@ class FuturesPlanner:
             p[0], p[1], self.goal[0], self.goal[1], self.tol, self.r, self.segs, samples,
             radii, self.moves, self.margin, self.escape, V, wx0, wy0, RES, self.loss,
             f.dist, f.x0, f.y0, f.h, self.no_cost if extra is None else extra, self.costs,
+            self.lost,
         )  # fmt: skip
         return int(m), float(risk)

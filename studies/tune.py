@@ -58,6 +58,9 @@ GRID: dict[str, list[dict[str, float]]] = {
     "copi-predictive": [{"alpha": 1.0}, {"alpha": 0.0}, {"alpha": 2.0},
                         {"alpha": 1.0, "margin": 0.2}, {"alpha": 1.0, "escape": 0.2},
                         {"alpha": 1.0, "horizon": 20}],
+    # the planners over futures copi-predictive is paired with: given its horizon too
+    "tracked-mpc": [{"horizon": 14}, {"horizon": 20}],
+    "model-oracle": [{"horizon": 14}, {"horizon": 20}],
     "navground-hrvo": [{"safety_margin": v} for v in (0.1, 0.3, 0.6, 1.0)],
     "navground-hl": [{"safety_margin": v} for v in (0.1, 0.3, 0.6, 1.0)],
 }

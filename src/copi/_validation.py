@@ -159,3 +159,11 @@ def non_negative(value: Any, name: str) -> float:
     if not ok or not math.isfinite(value) or value < 0:
         raise InvalidArgumentError(f"{name} must be a finite number >= 0; got {value!r}")
     return float(value)
+
+
+def check_flag(value: Any, name: str) -> bool:
+    """``value`` if it is True or False (numpy's too); anything else is refused, rather
+    than read as true because it is not empty."""
+    if isinstance(value, bool | np.bool_):
+        return bool(value)
+    raise InvalidArgumentError(f"{name} must be True or False; got {value!r}")

@@ -178,7 +178,8 @@ def test_a_scheduler_address_where_another_server_speaks_first_is_one_line(
                 conn, _ = server.accept()
             except OSError:
                 return
-            conn.sendall(b"SSH-2.0-OpenSSH_9.6p1\r\n")
+            with conn:  # closed here: a socket left to the collector warns in a later test
+                conn.sendall(b"SSH-2.0-OpenSSH_9.6p1\r\n")
 
     threading.Thread(target=banner, daemon=True).start()
     port = server.getsockname()[1]

@@ -55,6 +55,22 @@ def test_the_same_episode_gives_the_same_moves(predictive_caps: Path) -> None:
     assert (a.outcome, a.steps, a.path_length) == (b.outcome, b.steps, b.path_length)
 
 
+def test_split_is_a_flag_and_runs(predictive_caps: Path) -> None:
+    """``split`` takes True or False only (for tracked-mpc too); with it the agent runs
+    an episode, its tracker cutting arcs."""
+    from copi.baselines import TrackedMPC
+    from copi.errors import InvalidArgumentError
+
+    caps = Capabilities.load(predictive_caps)
+    for make in (lambda v: PredictiveAgent(caps, split=v), lambda v: TrackedMPC(split=v)):
+        for bad in ("yes", 1, None):
+            with pytest.raises(InvalidArgumentError, match="split must be True or False"):
+                make(bad)
+    agent = PredictiveAgent(caps, split=True)
+    out = run_episode(agent, draw_episode("crowd", 0, 1), sensing="map", max_steps=60)
+    assert out.steps > 0 and agent.tracker.split
+
+
 def test_it_keeps_the_agent_contract(predictive_caps: Path) -> None:
     caps = Capabilities.load(predictive_caps)
     check_agent(lambda: PredictiveAgent(caps), episodes=2)

@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from copi._validation import check_flag
 from copi.bounds import ModelOracle
 from copi.core import Observation, Sensing, Task
 from copi.errors import InvalidArgumentError
@@ -105,7 +106,7 @@ class TrackedMPC(ModelOracle):
         _check_positive(speed=speed, turn_sd=turn_sd)
         self.prior_speed = float(speed)
         self.prior_turn_sd = float(turn_sd)
-        self.split = bool(split)
+        self.split = check_flag(split, "split")
 
     def reset(self, task: Task) -> None:
         super().reset(task)

@@ -12,6 +12,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
+from copi._validation import check_flag
 from copi.core import EXPLAINED
 from copi.errors import InvalidArgumentError
 from copi.geometry import ring_angles
@@ -325,7 +326,7 @@ class MotionTracker:
         self.prior_speed = float(speed)
         self.prior_turn_sd = float(turn_sd)
         self.ahead = ahead
-        self.split = bool(split)
+        self.split = check_flag(split, "split")
         self._tracks: list[dict[str, Any]] = []
         # what its tracks measured: displacements, heading changes, radii
         self._speeds: list[float] = []

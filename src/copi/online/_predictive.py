@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from copi._validation import check_flag
 from copi.core import Agent, Observation, Sensing, Task, check_sensing
 from copi.errors import InvalidArgumentError
 from copi.learning import Capabilities, MotionTracker, motion_tables, sample_motion
@@ -143,7 +144,7 @@ class PredictiveAgent(Agent):
         self.alpha = float(alpha)
         self.beta = float(beta)
         self.seed = int(seed)
-        self.split = bool(split)
+        self.split = check_flag(split, "split")
         self.model = capabilities.motion_model
         self._tables = motion_tables(self.model)
         self._net = kernel_net(capabilities.safety.net)

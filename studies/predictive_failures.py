@@ -109,7 +109,7 @@ def census(caps_path: str, n: int, split: bool) -> tuple[list[dict[str, Any]], l
         agent.act = act  # type: ignore[method-assign]
         out = ep.run(agent, sensing="map", sim=sim)
         won.append(out.outcome == "success")
-        if won[-1]:
+        if won[-1] or not log:  # (no decision taken: nothing to class)
             continue
         last = log[-1]
         gaps = np.hypot(*(sim.centers - sim.position).T) - sim.radii - sim.agent_radius

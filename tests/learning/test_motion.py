@@ -298,3 +298,9 @@ def test_bad_tables_and_arguments_are_refused(model: MotionModel) -> None:
         motion_tables(model, speeds="fast")
     with pytest.raises(InvalidArgumentError, match="speed must be a positive number"):
         MotionTracker(32, 10.0, speed=float("nan"))
+    with pytest.raises(InvalidArgumentError, match="split must be True or False"):
+        MotionTracker(32, 10.0, split="no")
+    ranges = np.full(32, 10.0)
+    for where in ([np.nan, 1.0], [1.0, 2.0, 3.0]):
+        with pytest.raises(InvalidArgumentError, match="position must be two finite numbers"):
+            MotionTracker(32, 10.0).update(ranges, ranges, where)

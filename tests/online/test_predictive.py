@@ -57,7 +57,7 @@ def test_the_same_episode_gives_the_same_moves(predictive_caps: Path) -> None:
 
 def test_split_is_a_flag_and_runs(predictive_caps: Path) -> None:
     """``split`` takes True or False only (for tracked-mpc too); with it the agent runs
-    an episode, its tracker cutting arcs."""
+    an episode (what the cut arcs are: tests/learning/test_motion.py)."""
     from copi.baselines import TrackedMPC
     from copi.errors import InvalidArgumentError
 

@@ -206,6 +206,7 @@ def detect_discs(
     mean squared residual above :data:`SPLIT_BAD`: discs side by side, their hits less
     than :data:`JOIN` apart) is cut into the runs of rays that circles fit best
     (:data:`SPLIT_COST`), one body each."""
+    split = check_flag(split, "split")
     s, st = ranges, static
     n = len(s)
     hits = position + s[:, None] * unit
@@ -369,6 +370,8 @@ class MotionTracker:
                 f"{st.shape}"
             )
         pos = np.asarray(position, dtype=np.float64)
+        if pos.shape != (2,) or not np.isfinite(pos).all():
+            raise InvalidArgumentError(f"position must be two finite numbers; got {position!r}")
         return detect_discs(s, st, pos, self._unit, self.max_range, self._radii, self.split)
 
     def update(

@@ -6,7 +6,8 @@ import json
 from pathlib import Path
 from typing import Any
 
-__all__ = ["finish_cost_figure", "kept_times", "splice_section"]
+__all__ = ["drawn_episodes", "finish_cost_figure", "kept_times", "predictive_capabilities",
+           "splice_section"]
 
 
 def kept_times(path: Path, measured: dict[str, tuple[float, Any]]) -> dict[str, Any]:
@@ -56,3 +57,31 @@ def finish_cost_figure(fig: Any, ax: Any, out: Path, *, xlabel: str, title: str)
     fig.tight_layout()
     fig.savefig(out, dpi=120, bbox_inches="tight")
     plt.close(fig)
+
+
+def predictive_capabilities(path: str | Path) -> Path:
+    """The predictive preset's capabilities at ``path``, learnt there first when absent
+    (``copi learn --preset predictive``)."""
+    from copi.learning import learn
+    from copi.methods import PRESETS
+
+    out = Path(path)
+    if not out.is_file():
+        out.parent.mkdir(parents=True, exist_ok=True)
+        learn(PRESETS["predictive"].learn).save(out)
+    return out
+
+
+def drawn_episodes(family: str, n: int, seed: int) -> list[Any]:
+    """Episodes 0 .. n - 1 of ``family`` at ``seed``, those of a world with no valid task
+    left out (the family's others count)."""
+    from copi.errors import InvalidWorldError
+    from copi.runs import Episode
+
+    out = []
+    for k in range(n):
+        try:
+            out.append(Episode.draw(family, k, seed))
+        except InvalidWorldError:
+            continue
+    return out

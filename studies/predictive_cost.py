@@ -23,12 +23,11 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from copi.errors import InvalidWorldError  # noqa: E402
-from copi.learning import Capabilities, learn  # noqa: E402
-from copi.methods import PRESETS  # noqa: E402
+from copi.learning import Capabilities  # noqa: E402
 from copi.online import PredictiveAgent  # noqa: E402
 from copi.results import paired_difference  # noqa: E402
 from copi.runs import Episode  # noqa: E402
+from studies._common import drawn_episodes, predictive_capabilities  # noqa: E402
 
 SETTINGS = [(32, 20, 1), (32, 14, 1), (32, 12, 1), (16, 12, 1), (8, 12, 1), (16, 8, 1),
             (32, 20, 2), (32, 20, 4), (32, 20, 8), (32, 12, 4)]
@@ -93,20 +92,8 @@ def main() -> None:
     ap.add_argument("--caps", default="results/tuning/capabilities-predictive.npz")
     ap.add_argument("--out", default="docs/predictive-cost.md")
     a = ap.parse_args()
-    caps_path = Path(a.caps)
-    if not caps_path.is_file():
-        caps_path.parent.mkdir(parents=True, exist_ok=True)
-        learn(PRESETS["predictive"].learn).save(caps_path)
-    caps = Capabilities.load(caps_path)
-    episodes = {}
-    for fam in FAMILIES:
-        eps = []
-        for k in range(a.episodes):
-            try:
-                eps.append(Episode.draw(fam, k, VALIDATION_SEED))
-            except InvalidWorldError:  # a world with no valid task: the family's others count
-                continue
-        episodes[fam] = eps
+    caps = Capabilities.load(predictive_capabilities(a.caps))
+    episodes = {fam: drawn_episodes(fam, a.episodes, VALIDATION_SEED) for fam in FAMILIES}
     t_all = time.perf_counter()
     rows, base = [], {}
     for samples, horizon, together in SETTINGS:

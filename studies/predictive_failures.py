@@ -47,12 +47,11 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from copi.baselines import TrackedMPC  # noqa: E402
 from copi.bounds import ModelOracle  # noqa: E402
-from copi.errors import InvalidWorldError  # noqa: E402
-from copi.learning import Capabilities, learn  # noqa: E402
-from copi.methods import PRESETS  # noqa: E402
+from copi.learning import Capabilities  # noqa: E402
 from copi.online import PredictiveAgent  # noqa: E402
 from copi.results import paired_difference  # noqa: E402
 from copi.runs import Episode  # noqa: E402
+from studies._common import drawn_episodes, predictive_capabilities  # noqa: E402
 
 VALIDATION_SEED = 1
 CLASSES = ("cornered", "not made out", "heading unknown or wrong",
@@ -65,13 +64,7 @@ def _wrap(a: float) -> float:
 
 
 def _episodes(n: int) -> list[Episode]:
-    out = []
-    for k in range(n):
-        try:
-            out.append(Episode.draw("crowd", k, VALIDATION_SEED))
-        except InvalidWorldError:  # a world with no valid task: the family's others count
-            continue
-    return out
+    return drawn_episodes("crowd", n, VALIDATION_SEED)
 
 
 def tracked(n: int, split: bool) -> list[bool]:
@@ -165,10 +158,7 @@ def main() -> None:
     ap.add_argument("--caps", default="results/tuning/capabilities-predictive.npz")
     ap.add_argument("--out", default="docs/predictive-failures.md")
     a = ap.parse_args()
-    caps_path = Path(a.caps)
-    if not caps_path.is_file():
-        caps_path.parent.mkdir(parents=True, exist_ok=True)
-        learn(PRESETS["predictive"].learn).save(caps_path)
+    caps_path = predictive_capabilities(a.caps)
     caps = Capabilities.load(caps_path)
     t0 = time.perf_counter()
     with ProcessPoolExecutor(2) as pool:  # five runs, two at a time

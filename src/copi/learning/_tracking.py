@@ -109,9 +109,10 @@ residuals plus ``SPLIT_COST`` (a run too short for its own fit, 1.5 times that).
 
 @njit(cache=True)
 def _piece(hits, s, unit, px, py, radii, short, a, b):  # type: ignore[no-untyped-def]
-    """The circle of the rays a..b of an arc (hits, ranges ``s``, directions ``unit``),
-    as :func:`detect_discs` fits one arc: (cx, cy, radius, mean squared residual; inf
-    when every fit put the centre before the middle hit)."""
+    """The circle of the rays a..b of an arc (hits, ranges ``s``, directions ``unit``;
+    the agent at px, py), fitted as :func:`detect_discs` says: (cx, cy, radius, mean
+    squared residual; inf when every fit put the centre before the middle hit).
+    Compiled: a tracker fits every arc with seven radii each step."""
     k = b - a + 1
     mid = a + k // 2
     behind = s[mid]
@@ -226,28 +227,16 @@ def detect_discs(
             and math.dist(hits[0], hits[n - 1]) < JOIN):  # fmt: skip
         arcs[0] = arcs.pop() + arcs[0]  # the arc across ray 0
     centres, radii, rays = [], [], []
+    px, py = float(position[0]), float(position[1])
     for arc in arcs:
-        mid = arc[len(arc) // 2]
-        behind = s[mid]  # the centre lies beyond the middle hit
-        best: tuple[NDArray[np.float64], float, float] | None = None
         short = float(np.mean(radii_seen)) if radii_seen else 0.75
-        pts = hits[arc]  # finite, (k, 2): the compiled fit is called without fit_circle's checks
-        for r in RADII if len(arc) >= WELL else (short,):
-            c0 = hits[mid] + r * unit[mid]
-            if len(arc) > 1:
-                cx, cy, err = _fit_circle(pts, r, c0[0], c0[1])
-                c = np.array([cx, cy])
-            else:
-                c, err = c0, 0.0
-            if math.dist(c, position) < behind:
-                c, err = c0, math.inf
-            if best is None or err < best[2] - 1e-9:
-                best = (c, r, err)
-        assert best is not None
-        if split and len(arc) >= 2 * WELL - 1 and best[2] > SPLIT_BAD:
-            runs = _split_arc(pts, np.ascontiguousarray(s[arc]), np.ascontiguousarray(unit[arc]),
-                              float(position[0]), float(position[1]), _RADII, short,
-                              SPLIT_COST)  # fmt: skip
+        pts = hits[arc]  # finite, (k, 2)
+        s_arc = np.ascontiguousarray(s[arc])
+        u_arc = np.ascontiguousarray(unit[arc])
+        cx, cy, r, err = _piece(pts, s_arc, u_arc, px, py, _RADII, short, 0, len(arc) - 1)
+        best = (np.array([cx, cy]), r, err)
+        if split and len(arc) >= 2 * WELL - 1 and err > SPLIT_BAD:
+            runs = _split_arc(pts, s_arc, u_arc, px, py, _RADII, short, SPLIT_COST)
             for a, b, cx, cy, r in runs:
                 centres.append(np.array([cx, cy]))
                 radii.append(float(r))

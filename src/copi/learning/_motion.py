@@ -42,7 +42,7 @@ from numpy.typing import NDArray
 
 from copi._validation import positive_int
 from copi.errors import InvalidArgumentError
-from copi.geometry.kernels import local_segments, sweep_one
+from copi.geometry.kernels import local_segments, point_segment_d2, sweep_one
 from copi.learning._tracking import MAD, MotionTracker
 from copi.world import RandomWalk, RangeSensor, Simulator, random_world, sample_world
 
@@ -264,6 +264,54 @@ def _draw(cdf):  # type: ignore[no-untyped-def]
     return b
 
 
+_GUIDE = 256
+"""Cells of the guide tables of :func:`_guides` (a power of two: u * _GUIDE is exact)."""
+
+
+@njit(cache=True, nogil=True)
+def _guides(cdf):  # type: ignore[no-untyped-def]
+    """For each row a of the cumulative laws ``cdf``, ``out[a, q]``: the first bin whose
+    cumulative share is q / _GUIDE or more (the last bin at most). A draw u falls in
+    cell q = floor(u * _GUIDE), and every bin before ``out[a, q]`` is below u: the scan
+    of :func:`_draw` may start there (a guide table; Devroye 1986, §III.2.4) and ends
+    on the same bin, after one or two tests instead of half the row's."""
+    n_r, n = cdf.shape
+    out = np.empty((n_r, _GUIDE), dtype=np.int64)
+    for a in range(n_r):
+        b = 0
+        for q in range(_GUIDE):
+            while b < n - 1 and cdf[a, b] < q / _GUIDE:
+                b += 1
+            out[a, q] = b
+    return out
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _draw_row(cdf, a, guide):  # type: ignore[no-untyped-def]
+    """:func:`_draw` from row ``a`` of ``cdf``, its scan started by ``guide``
+    (:func:`_guides`): the same bin for the same uniform draw."""
+    u = np.random.random()
+    b = guide[a, int(u * _GUIDE)]
+    while b < cdf.shape[1] - 1 and cdf[a, b] < u:
+        b += 1
+    return b
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _walls_near(x, y, segs, reach, buf):  # type: ignore[no-untyped-def]
+    """Copies the walls ``segs`` within ``reach`` of (x, y) into the first rows of
+    ``buf``; returns how many (:func:`copi.geometry.kernels.local_segments`, into a
+    buffer kept for the whole draw rather than two new arrays)."""
+    n = 0
+    r2 = reach * reach
+    for k in range(segs.shape[0]):
+        if point_segment_d2(x, y, segs, k) <= r2:
+            for c in range(4):
+                buf[n, c] = segs[k, c]
+            n += 1
+    return n
+
+
 @njit(cache=True, nogil=True)
 def _edge_bin(edges, v):  # type: ignore[no-untyped-def]
     """The bin of ``edges`` holding ``v`` (the first below its lower edge, the last
@@ -278,10 +326,6 @@ def _edge_bin(edges, v):  # type: ignore[no-untyped-def]
 def _speed_in(speed_edges, b):  # type: ignore[no-untyped-def]
     """A speed uniform in bin ``b`` of ``speed_edges`` (one uniform draw)."""
     return speed_edges[b] + np.random.random() * (speed_edges[b + 1] - speed_edges[b])
-
-
-_REFRESH = 4
-"""Steps between two draws of the walls near a body in :func:`sample_motion`."""
 
 
 @njit(cache=True, nogil=True)  # nogil: many agents draw at once in threads
@@ -306,20 +350,21 @@ def sample_motion(  # type: ignore[no-untyped-def]
     slack = ch * 0.7072
     out = np.empty((n_samples, horizon + 1, d, 2))
     width = 2.0 * math.pi / n_turn
-    # A wall counts for a body only within ``near`` of it: farther than the last bin's
-    # edge of the room ahead (beyond it every room falls in that bin) and than a step
-    # (what may stop the move), with the way it may go before the set is drawn again,
-    # every _REFRESH steps; so each sweep tests a few walls, not all within the horizon,
-    # and the futures are the same to the bit.
+    guide = _guides(turn_cdf)
+    # A wall counts for a step only within ``reach`` of the body: farther than the last
+    # bin's edge of the room ahead (beyond it every room falls in that bin) and than a
+    # step (what may stop the move), so each sweep tests the few walls that can change
+    # what it decides, and the futures are the same to the bit as with every wall.
     room_far = ahead_edges[ahead_edges.shape[0] - 2]
+    buf = np.empty((segs.shape[0], 4))
     for k in range(d):
         x0 = bodies[k, 0]
         y0 = bodies[k, 1]
         rk = bodies[k, 5]
         known = bodies[k, 3] > 0.5
         vmax = max(speed_edges[-1], bodies[k, 4]) if known else speed_edges[-1]
-        near = max(room_far, vmax) + rk + _REFRESH * vmax + 1e-3
-        around = local_segments(x0, y0, segs, horizon * vmax + near)
+        reach = max(room_far, vmax) + rk + 1e-3
+        around = local_segments(x0, y0, segs, horizon * vmax + reach)
         for s in range(n_samples):
             x = x0
             y = y0
@@ -331,20 +376,19 @@ def sample_motion(  # type: ignore[no-untyped-def]
                 v = _speed_in(speed_edges, _draw(start_cdf))
             out[s, 0, k, 0] = x
             out[s, 0, k, 1] = y
-            local = around
             for t in range(horizon):
                 ci = int(math.floor((y - cy0) / ch + 0.5))
                 cj = int(math.floor((x - cx0) / ch + 0.5))
                 # how far every wall is at least (the grid's cell centre's clearance, less
                 # the most a point of the cell can be nearer)
                 far = clear[ci, cj] - slack if 0 <= ci < cny and 0 <= cj < cnx else -1.0
-                if t % _REFRESH == 0 and not far > near:
-                    local = local_segments(x, y, around, near)
+                n_near = 0 if far > reach else _walls_near(x, y, around, reach, buf)
+                local = buf[:n_near]
                 room = 1e3
                 if not far > room_far + rk:
                     room = sweep_one(x, y, math.cos(h), math.sin(h), local, rk)
-                b = _draw(turn_cdf[_edge_bin(ahead_edges, room)])
-                h += -math.pi + (b + np.random.random()) * width
+                a = _edge_bin(ahead_edges, room)
+                h += -math.pi + (_draw_row(turn_cdf, a, guide) + np.random.random()) * width
                 if speed_cdf.shape[0] > 1:  # a speed drawn after the last (else: kept)
                     v = _speed_in(speed_edges, _draw(speed_cdf[_edge_bin(speed_edges, v)]))
                 dx = math.cos(h)

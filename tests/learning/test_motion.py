@@ -11,6 +11,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from numba import njit
 
 from copi.errors import CapabilitiesFormatError, InvalidArgumentError
@@ -24,7 +26,7 @@ from copi.learning import (
     motion_tables,
     sample_motion,
 )
-from copi.learning._motion import _draw, _edge_bin, _speed_in
+from copi.learning._motion import _GUIDE, _draw, _draw_row, _edge_bin, _guides, _speed_in
 from copi.world import RangeSensor, World
 
 
@@ -129,8 +131,9 @@ def _every_wall_every_step(bodies, segs, n_samples, horizon, seed, turn_cdf, spe
 
 
 def test_futures_are_those_of_sweeping_every_wall_every_step(model: MotionModel) -> None:
-    """The walls a body's sweeps test are only those near it (drawn again every few
-    steps), and none where the clearance grid says none is near: the futures are those of
+    """The walls a body's sweeps test are only those within the reach that can change
+    what they decide, none where the clearance grid says none is near, and its turns are
+    drawn through a guide table: the futures are those of
     sweeping every wall at every step, bit for bit, among many walls (pillars and a long
     hall), bodies near and far from them, one faster than the model's fastest."""
     from copi.geometry import clearance
@@ -152,6 +155,34 @@ def test_futures_are_those_of_sweeping_every_wall_every_step(model: MotionModel)
         assert np.array_equal(fast, naive)
     step = np.hypot(*np.diff(fast, axis=1).transpose(3, 0, 1, 2))
     assert (step < 0.3).mean() > 0.01  # walls stopped moves: the sweeps mattered
+
+
+@njit(cache=False)
+def _both_draws(cdf, guide, a, seed, n):  # type: ignore[no-untyped-def]
+    np.random.seed(seed)
+    scan = np.array([_draw(cdf[a]) for _ in range(n)])
+    np.random.seed(seed)
+    guided = np.array([_draw_row(cdf, a, guide) for _ in range(n)])
+    return scan, guided
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.integers(0, 5), min_size=2, max_size=40), st.integers(0, 2**31 - 2))
+def test_a_guided_draw_is_the_scans_draw(weights: list[int], seed: int) -> None:
+    """A bin drawn through the guide table is the one the plain scan of the cumulative
+    law finds for the same uniform draw, whatever the law (empty bins, mass in one bin,
+    bins finer than the guide's cells), and every bin with mass is drawn."""
+    w = np.array(weights, dtype=np.float64)
+    w[0] += w.sum() == 0  # a law has some mass
+    row = np.cumsum(w) / w.sum()
+    uniform = np.arange(1, len(row) + 1) / len(row)
+    cdf = np.ascontiguousarray(np.vstack([row, uniform]))
+    guide = _guides(cdf)
+    assert guide.shape == (2, _GUIDE)
+    for a in (0, 1):
+        scan, guided = _both_draws(cdf, guide, a, seed, 400)
+        assert np.array_equal(scan, guided)
+    assert set(_both_draws(cdf, guide, 1, seed, 4000)[1]) == set(range(len(row)))
 
 
 def test_a_circle_fit_agrees_with_scipys_least_squares() -> None:

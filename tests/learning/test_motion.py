@@ -27,6 +27,7 @@ from copi.learning import (
     sample_motion,
 )
 from copi.learning._motion import _GUIDE, _draw, _draw_row, _edge_bin, _guides, _speed_in
+from copi.learning._tracking import JOIN, _gaps, _median
 from copi.world import RangeSensor, World
 
 
@@ -183,6 +184,25 @@ def test_a_guided_draw_is_the_scans_draw(weights: list[int], seed: int) -> None:
         scan, guided = _both_draws(cdf, guide, a, seed, 400)
         assert np.array_equal(scan, guided)
     assert set(_both_draws(cdf, guide, 1, seed, 4000)[1]) == set(range(len(row)))
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.floats(0, 3, allow_nan=False), min_size=1, max_size=60))
+def test_the_trackers_median_is_numpys(values: list[float]) -> None:
+    """The tracker reads its speed and turn medians off lists it keeps sorted: the same
+    number as numpy's median of the values in the order they came, to the bit."""
+    assert _median(sorted(values)) == np.median(values)
+
+
+@settings(max_examples=100, deadline=None)
+@given(st.lists(st.tuples(st.floats(-2, 2), st.floats(-2, 2)), min_size=1, max_size=20),
+       st.floats(0, 2 * math.pi))
+def test_hits_are_joined_as_by_math_dist(steps: list[tuple[float, float]], turn: float) -> None:
+    """The gaps between hits that cut arcs are math.dist's, to the bit where it matters:
+    on either side of JOIN they fall as math.dist's do, steps of exactly JOIN included."""
+    d = np.array(steps + [(JOIN * math.cos(turn), JOIN * math.sin(turn))], dtype=np.float64)
+    ref = np.array([math.dist((0.0, 0.0), (x, y)) for x, y in d])
+    assert np.array_equal(_gaps(d) < JOIN, ref < JOIN)
 
 
 def test_a_circle_fit_agrees_with_scipys_least_squares() -> None:

@@ -4,6 +4,7 @@ reading."""
 
 from __future__ import annotations
 
+import bisect
 import math
 from collections.abc import Callable
 from typing import Any
@@ -214,43 +215,68 @@ def detect_discs(
     idx = np.flatnonzero((s < st - EXPLAINED) & (s < max_range - 1e-9))
     if idx.size == 0:
         return np.zeros((0, 2)), np.zeros(0), np.zeros(0, dtype=np.int64)
-    arcs: list[list[int]] = []
-    cur = [int(idx[0])]
-    for a, b in zip(idx[:-1], idx[1:], strict=True):
-        if b == a + 1 and math.dist(hits[a], hits[b]) < JOIN:
-            cur.append(int(b))
-        else:
-            arcs.append(cur)
-            cur = [int(b)]
-    arcs.append(cur)
+    # neighbouring hits join (a ray and the next, less than JOIN apart): the arcs
+    step = hits[idx[1:]] - hits[idx[:-1]]
+    join = (idx[1:] == idx[:-1] + 1) & (_gaps(step) < JOIN)
+    arcs = np.split(idx, np.flatnonzero(~join) + 1)
     if (len(arcs) > 1 and arcs[0][0] == 0 and arcs[-1][-1] == n - 1
             and math.dist(hits[0], hits[n - 1]) < JOIN):  # fmt: skip
-        arcs[0] = arcs.pop() + arcs[0]  # the arc across ray 0
+        arcs[0] = np.concatenate([arcs.pop(), arcs[0]])  # the arc across ray 0
     centres, radii, rays = [], [], []
     px, py = float(position[0]), float(position[1])
+    mean_at = [-1, 0.75]  # (radii seen when their mean was taken, the mean)
+
+    def short() -> float:
+        """The mean radius seen so far (0.75 before any): a short arc's body's."""
+        k = len(radii_seen)
+        if mean_at[0] != k:  # taken again only when a radius came in
+            mean_at[0], mean_at[1] = k, float(np.mean(radii_seen)) if k else 0.75
+        return mean_at[1]
+
     for arc in arcs:
-        short = float(np.mean(radii_seen)) if radii_seen else 0.75
         pts = hits[arc]  # finite, (k, 2)
-        s_arc = np.ascontiguousarray(s[arc])
-        u_arc = np.ascontiguousarray(unit[arc])
-        cx, cy, r, err = _piece(pts, s_arc, u_arc, px, py, _RADII, short, 0, len(arc) - 1)
-        best = (np.array([cx, cy]), r, err)
-        if split and len(arc) >= 2 * WELL - 1 and err > SPLIT_BAD:
-            runs = _split_arc(pts, s_arc, u_arc, px, py, _RADII, short, SPLIT_COST)
+        s_arc = s[arc]
+        u_arc = unit[arc]
+        k = len(arc)
+        # a short arc's body takes the mean radius; a long one's is fitted (no mean needed)
+        mean_r = short() if k < WELL or (split and k >= 2 * WELL - 1) else 0.75
+        cx, cy, r, err = _piece(pts, s_arc, u_arc, px, py, _RADII, mean_r, 0, k - 1)
+        if split and k >= 2 * WELL - 1 and err > SPLIT_BAD:
+            runs = _split_arc(pts, s_arc, u_arc, px, py, _RADII, mean_r, SPLIT_COST)
             for a, b, cx, cy, r in runs:
-                centres.append(np.array([cx, cy]))
+                centres.append((cx, cy))
                 radii.append(float(r))
                 rays.append(int(b - a + 1))
                 if b - a + 1 >= WELL:
                     radii_seen.append(float(r))
             continue
-        centres.append(best[0])
-        radii.append(best[1])
-        rays.append(len(arc))
-        if len(arc) >= WELL:
-            radii_seen.append(best[1])
-    return (np.array(centres).reshape(-1, 2), np.array(radii),
+        centres.append((cx, cy))
+        radii.append(r)
+        rays.append(k)
+        if k >= WELL:
+            radii_seen.append(r)
+    return (np.array(centres, dtype=np.float64).reshape(-1, 2), np.array(radii),
             np.array(rays, dtype=np.int64))  # fmt: skip
+
+
+def _gaps(d: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The lengths of the rows of ``d`` (k, 2), as :func:`math.dist` gives them: numpy's
+    hypot, and where it is within a hair of :data:`JOIN` (the two may differ in the last
+    bit), math.dist's own, so that an arc is cut where the one-ray-at-a-time loop cut
+    it."""
+    out = np.hypot(d[:, 0], d[:, 1])
+    for i in np.flatnonzero(np.abs(out - JOIN) < 1e-9):
+        out[i] = math.hypot(float(d[i, 0]), float(d[i, 1]))
+    return out
+
+
+def _median(ordered: list[float]) -> float:
+    """The median of the numbers ``ordered`` (sorted, at least one), as numpy's median
+    gives it: the middle one, or the mean of the middle two."""
+    k = len(ordered)
+    if k % 2:
+        return ordered[k // 2]
+    return (ordered[k // 2 - 1] + ordered[k // 2]) / 2
 
 
 MIN_SPEED_SAMPLES = 5
@@ -320,8 +346,10 @@ class MotionTracker:
         self._tracks: list[dict[str, Any]] = []
         # what its tracks measured: displacements, heading changes, radii
         self._speeds: list[float] = []
-        self._speed_at = (-1, 0.0)  # (displacements counted, their median)
         self._turns: list[float] = []
+        # the same, kept sorted (of the turns, their sizes): a median is read, not sorted
+        self._speeds_sorted: list[float] = []
+        self._turn_sizes: list[float] = []
         self._radii: list[float] = []
         self._radius = np.zeros(0)
         self.examples: list[tuple[float, float, float, float]] = []
@@ -332,19 +360,16 @@ class MotionTracker:
     @property
     def speed(self) -> float:
         """The bodies' speed per step: estimated once 5 displacements were measured."""
-        k = len(self._speeds)
-        if k < MIN_SPEED_SAMPLES:
+        if len(self._speeds) < MIN_SPEED_SAMPLES:
             return self.prior_speed
-        if self._speed_at[0] != k:  # the median again only when a displacement came in
-            self._speed_at = (k, float(np.median(self._speeds)))
-        return self._speed_at[1]
+        return _median(self._speeds_sorted)
 
     @property
     def turn_sd(self) -> float:
         """The spread of a body's heading change per step, radians (robust estimate)."""
         if len(self._turns) < MIN_TURN_SAMPLES:
             return self.prior_turn_sd
-        return float(MAD * np.median(np.abs(self._turns)))
+        return float(MAD * _median(self._turn_sizes))
 
     def detect(
         self, ranges: NDArray[np.float64], static: NDArray[np.float64], position: Any
@@ -400,9 +425,11 @@ class MotionTracker:
             heading = math.atan2(disp[1], disp[0])
             if measured:
                 self._speeds.append(length)
+                bisect.insort(self._speeds_sorted, length)
                 if t["heading"] is not None:
                     turn = (heading - t["heading"] + math.pi) % (2 * math.pi) - math.pi
                     self._turns.append(turn)
+                    bisect.insort(self._turn_sizes, abs(turn))
                     if self.ahead is not None and per_t[ti] == 1 and per_d[di] == 1:
                         room = self.ahead(t["c"], t["heading"], float(R[di]))
                         self.examples.append((room, turn, t["length"], length))
@@ -427,8 +454,9 @@ class MotionTracker:
         """The bodies of the last reading as :func:`sample_motion` reads them: rows (x, y,
         heading, known, speed, radius), the speed the estimated one."""
         out = np.zeros((len(self._tracks), 6))
+        speed = self.speed
         for i, t in enumerate(self._tracks):
             v = t["v"]
             out[i] = (t["c"][0], t["c"][1], math.atan2(v[1], v[0]), float(t["known"]),
-                      self.speed, self._radius[i])  # fmt: skip
+                      speed, self._radius[i])  # fmt: skip
         return out

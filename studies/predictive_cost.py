@@ -18,6 +18,7 @@ import argparse
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -56,6 +57,65 @@ def run(caps: Capabilities, samples: int, horizon: int, together: int,
     return won, took
 
 
+PARTS = (
+    ("following the bodies (tracker)", "copi.learning._tracking", "MotionTracker.update"),
+    ("", "copi.learning._tracking", "MotionTracker.bodies"),
+    ("drawing the futures", "copi.online._predictive", "sample_motion"),
+    ("the safety network", "copi.online._predictive", "PredictiveAgent.move_costs"),
+    ("the window's grids", "copi.planning.futures", "window"),
+    ("valuing the window (hindsight)", "copi.planning.futures", "hindsight_values"),
+    ("the first move's check", "copi.planning.futures", "escape_move"),
+)
+"""The parts of a decision :func:`breakdown` times: (row, module, name there; a row of
+"" adds to the row above it)."""
+
+
+def breakdown(caps: Capabilities, episodes: list[Episode]) -> dict[str, list[float]]:
+    """Each part of the registered setting's decisions timed apart (seconds, one entry a
+    decision): each of :data:`PARTS` wrapped in a timer where ``act`` finds it, for the
+    length of this call only, and ``act`` itself around them ("everything", whose rest
+    is the glue between the parts)."""
+    import importlib
+
+    took: dict[str, list[float]] = {"everything": []}
+    saved = []
+    agent = PredictiveAgent(caps)
+
+    def timed(row: str, f):  # type: ignore[no-untyped-def]
+        def g(*args, **kw):  # type: ignore[no-untyped-def]
+            t0 = time.perf_counter()
+            out = f(*args, **kw)
+            took[row][-1] += time.perf_counter() - t0
+            return out
+        return g
+
+    row = ""
+    for label, module, name in PARTS:
+        row = label or row
+        took.setdefault(row, [])
+        owner: Any = importlib.import_module(module)
+        attr = name
+        if "." in name:
+            owner, attr = getattr(owner, name.split(".")[0]), name.split(".")[1]
+        saved.append((owner, attr, getattr(owner, attr)))
+        setattr(owner, attr, timed(row, getattr(owner, attr)))
+    plain = agent.act
+
+    def act(obs):  # type: ignore[no-untyped-def]
+        for v in took.values():
+            v.append(0.0)
+        return timed("everything", plain)(obs)
+
+    agent.act = act  # type: ignore[method-assign]
+    try:
+        for e in episodes:
+            e.run(agent, sensing="map")
+    finally:
+        for owner, attr, f in saved:
+            setattr(owner, attr, f)
+    return took
+
+
 def figure(rows: list[dict], out: Path) -> None:
     import matplotlib
 
@@ -91,6 +151,8 @@ def main() -> None:
     ap.add_argument("--episodes", type=int, default=100, help="validation episodes a family")
     ap.add_argument("--caps", default="results/tuning/capabilities-predictive.npz")
     ap.add_argument("--out", default="docs/predictive-cost.md")
+    ap.add_argument("--parts-episodes", type=int, default=20,
+                    help="validation episodes a family whose decisions are timed part by part")
     a = ap.parse_args()
     caps = Capabilities.load(predictive_capabilities(a.caps))
     episodes = {fam: drawn_episodes(fam, a.episodes, VALIDATION_SEED) for fam in FAMILIES}
@@ -109,6 +171,7 @@ def main() -> None:
         rows.append(row)
         print(samples, horizon, together, {f: (round(row[f]["success"], 3), round(row[f]["ms"], 2))
                                  for f in FAMILIES}, flush=True)  # fmt: skip
+    parts = {fam: breakdown(caps, episodes[fam][: a.parts_episodes]) for fam in FAMILIES}
     minutes = (time.perf_counter() - t_all) / 60
     out = Path(a.out)
     figure(rows, out.with_suffix(".png"))
@@ -165,6 +228,27 @@ def main() -> None:
         "tuning on both families is redone (studies/tune.py) and every page that cites "
         "copi-predictive is regenerated.", ""]
     lines += [f"![cost against success]({out.with_suffix('.png').name})", ""]
+    lines += [
+        "## Where a decision's time goes", "",
+        f"The registered setting's decisions on the first {a.parts_episodes} of those "
+        "episodes a family, each part timed apart (a timer around each of the functions "
+        "`act` calls, `breakdown` in the script): the median over the decisions, and the "
+        "part's share of all the decisions' time. *The rest*: what `act` does between the "
+        "parts (reading the observation, Python's calls).", "",
+        "| part | " + " | ".join(f"{f}: ms (median) | {f}: share" for f in FAMILIES) + " |",
+        "|---|" + "---|---|" * len(FAMILIES),
+    ]
+    labels = [lb for lb, _, _ in PARTS if lb] + ["the rest", "everything"]
+    for lb in labels:
+        cells = []
+        for fam in FAMILIES:
+            t = parts[fam]
+            every = np.array(t["everything"])
+            v = every - sum(np.array(t[k]) for k in t if k != "everything") if lb == "the rest" \
+                else np.array(t[lb])
+            cells.append(f"{1e3 * float(np.median(v)):.2f} | {100 * v.sum() / every.sum():.0f} %")
+        lines.append(f"| {lb} | " + " | ".join(cells) + " |")
+    lines.append("")
     out.write_text("\n".join(lines))
     print(f"wrote {out}")
 

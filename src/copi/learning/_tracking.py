@@ -398,13 +398,17 @@ class MotionTracker:
         tracks = self._tracks
         speed = self.speed
         pairs = []
+        found = C.tolist()  # math.dist reads Python floats faster than numpy's
         for ti, t in enumerate(tracks):
+            cx, cy = t["c"].tolist()
+            vx, vy = t["v"].tolist()
+            ahead = (cx + vx, cy + vy)
             for di in range(len(C)):
                 # a body moves ``speed`` a step, whichever way it turned; of the
                 # candidates, the one nearest its prediction (if its heading is known)
-                ring = abs(math.dist(C[di], t["c"]) - speed)
+                ring = abs(math.dist(found[di], (cx, cy)) - speed)
                 if ring < 0.5:
-                    near = math.dist(C[di], t["c"] + t["v"]) if t["known"] else ring
+                    near = math.dist(found[di], ahead) if t["known"] else ring
                     pairs.append((near, ti, di))
         pairs.sort()
         # a match is unambiguous when neither of its two had another candidate: only

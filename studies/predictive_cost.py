@@ -234,7 +234,9 @@ def main() -> None:
         "episodes a family, each part timed apart (a timer around each of the functions "
         "`act` calls, `breakdown` in the script): the median over the decisions, and the "
         "part's share of all the decisions' time. *The rest*: what `act` does between the "
-        "parts (reading the observation, Python's calls).", "",
+        "parts (reading the observation, Python's calls). The parts ran after the table "
+        "above, in the same process; on a shared machine whose speed drifts, compare times "
+        "within one run, not across runs.", "",
         "| part | " + " | ".join(f"{f}: ms (median) | {f}: share" for f in FAMILIES) + " |",
         "|---|" + "---|---|" * len(FAMILIES),
     ]

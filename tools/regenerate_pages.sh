@@ -44,6 +44,15 @@ $BIN/python tools/benchmark_page.py "$R/bench-dense-crowds" docs/benchmark-dense
     --command "\`copi benchmark -o results/bench-dense-crowds --world-file $W --episodes 120 --workers 2 --methods $D --against compass-guard\` (seed 0; $(took "$t") on 2 cores)"
 
 t=$(date +%s)
+F="copi-predictive,tracked-mpc,model-oracle,compass-guard@map"
+$BIN/copi benchmark -o "$R/crowd-power" --families crowd --episodes 800 --seed 2 --methods "$F" \
+    --against tracked-mpc --workers 2
+$BIN/python tools/benchmark_page.py "$R/crowd-power" docs/benchmark-crowd-fresh.md \
+    --what "crowd episodes of a seed no method was tuned on (seed 2, 800 episodes)" --against tracked-mpc \
+    --command "\`copi benchmark -o results/crowd-power --families crowd --episodes 800 --seed 2 --methods $F --against tracked-mpc --workers 2\` ($(took "$t") on 2 cores, the predictive preset's capabilities learnt first)"
+$BIN/python studies/predictive_gap.py --episodes 400
+
+t=$(date +%s)
 $BIN/copi benchmark -o "$R/bench-ablations" --episodes 500 --workers 2 --methods ablations
 $BIN/python tools/benchmark_page.py "$R/bench-ablations" docs/benchmark-ablations.md \
     --what "the learnt preset's ablations, 500 episodes" \

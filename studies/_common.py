@@ -59,6 +59,12 @@ def finish_cost_figure(fig: Any, ax: Any, out: Path, *, xlabel: str, title: str)
     plt.close(fig)
 
 
+def interval(d: Any) -> str:
+    """A paired difference (:func:`copi.results.paired_difference`) in points with its
+    95 % interval, as the studies' tables print it: ``+1.5 [-1.2, +4.2]``."""
+    return f"{100 * d.estimate:+.1f} [{100 * d.low:+.1f}, {100 * d.high:+.1f}]"
+
+
 def predictive_capabilities(path: str | Path) -> Path:
     """The predictive preset's capabilities at ``path``, learnt there first when absent
     (``copi learn --preset predictive``)."""

@@ -28,7 +28,7 @@ from copi.learning import Capabilities  # noqa: E402
 from copi.online import PredictiveAgent  # noqa: E402
 from copi.results import paired_difference  # noqa: E402
 from copi.runs import Episode  # noqa: E402
-from studies._common import drawn_episodes, predictive_capabilities  # noqa: E402
+from studies._common import drawn_episodes, interval, predictive_capabilities  # noqa: E402
 
 SETTINGS = [(32, 20, 1), (32, 14, 1), (32, 12, 1), (16, 12, 1), (8, 12, 1), (16, 8, 1),
             (32, 20, 2), (32, 20, 4), (32, 20, 8), (32, 12, 4)]
@@ -202,8 +202,7 @@ def main() -> None:
         for fam in FAMILIES:
             c = r[fam]
             d = c["delta"]
-            delta = "—" if r["registered"] else (
-                f"{100 * d.estimate:+.1f} [{100 * d.low:+.1f}, {100 * d.high:+.1f}]")
+            delta = "—" if r["registered"] else interval(d)
             cells.append(f"{100 * c['success']:.1f} % | {delta} | "
                          f"{c['ms']:.2f} / {c['mean_ms']:.2f}")  # fmt: skip
         mark = " (registered)" if r["registered"] else ""

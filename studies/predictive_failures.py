@@ -51,7 +51,7 @@ from copi.learning import Capabilities  # noqa: E402
 from copi.online import PredictiveAgent  # noqa: E402
 from copi.results import paired_difference  # noqa: E402
 from copi.runs import Episode  # noqa: E402
-from studies._common import drawn_episodes, predictive_capabilities  # noqa: E402
+from studies._common import drawn_episodes, interval, predictive_capabilities  # noqa: E402
 
 VALIDATION_SEED = 1
 CLASSES = ("cornered", "not made out", "heading unknown or wrong",
@@ -148,8 +148,7 @@ def _classes(lost: list[dict[str, Any]], turn_sd: float) -> list[list[str]]:
 
 
 def _delta(a: list[bool], b: list[bool]) -> str:
-    d = paired_difference(a, b)
-    return f"{100 * d.estimate:+.1f} [{100 * d.low:+.1f}, {100 * d.high:+.1f}]"
+    return interval(paired_difference(a, b))
 
 
 def main() -> None:

@@ -33,7 +33,9 @@ import argparse
 import math
 import sys
 import time
+from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -43,10 +45,11 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from copi.bounds import ModelOracle  # noqa: E402
 from copi.core import Observation  # noqa: E402
+from copi.geometry import ring_angles  # noqa: E402
 from copi.learning import Capabilities  # noqa: E402
 from copi.online import PredictiveAgent  # noqa: E402
 from copi.results import paired_difference  # noqa: E402
-from studies._common import drawn_episodes, predictive_capabilities  # noqa: E402
+from studies._common import drawn_episodes, interval, predictive_capabilities  # noqa: E402
 
 SEED = 2
 """Episodes of a seed no method was tuned on and no benchmark table reports."""
@@ -54,7 +57,7 @@ ARMS = ("copi-predictive", "+ the visible discs' true state", "+ every disc's tr
         "model-oracle, visible discs only", "model-oracle")  # fmt: skip
 PARTS = ("place", "heading", "missed", "phantoms", "all")
 """The second table's arms: copi-predictive's own tracker, one thing of the bodies it
-made out put right (:class:`PartTruth`)."""
+made out put right (:class:`_Corrected`)."""
 
 
 def visible(obs: Observation, n_rays: int) -> np.ndarray:
@@ -62,7 +65,7 @@ def visible(obs: Observation, n_rays: int) -> np.ndarray:
     circle; a ray that hits nothing ends farther from every disc)."""
     disc = np.asarray(obs.obstacles, dtype=np.float64).reshape(-1, 5)
     r = np.asarray(obs.ranges, dtype=np.float64)
-    ang = 2 * np.pi * np.arange(n_rays) / n_rays
+    ang = ring_angles(n_rays)
     hits = np.asarray(obs.position)[None] + r[:, None] * np.column_stack([np.cos(ang), np.sin(ang)])
     if not len(disc) or not len(hits):
         return np.zeros(len(disc), dtype=bool)
@@ -72,9 +75,10 @@ def visible(obs: Observation, n_rays: int) -> np.ndarray:
 
 class _Truth:
     """A tracker that is told: the bodies are the true discs of the last observation
-    (all, or those its reading hits), as rows (x, y, heading, known, speed, radius)."""
+    (all, or those its reading hits), as rows (x, y, heading, known, speed, radius); the
+    agent's own tracker is left aside."""
 
-    def __init__(self, n_rays: int, only_visible: bool) -> None:
+    def __init__(self, inner: Any, n_rays: int, only_visible: bool) -> None:
         self.n_rays, self.only_visible = n_rays, only_visible
         self.obs: Observation | None = None
 
@@ -92,16 +96,18 @@ class _Truth:
         return np.ascontiguousarray(rows.reshape(-1, 6))
 
 
-class TruthPredictive(PredictiveAgent):
-    """copi-predictive whose tracker is replaced by the simulator's truth (arms 2, 3)."""
+class Told(PredictiveAgent):
+    """copi-predictive whose tracker is ``tell(its own tracker, rays)`` (:class:`_Truth`
+    or :class:`_Corrected`), handed each observation before the decision: the arms that
+    read the simulator's truth."""
 
-    def __init__(self, caps: Capabilities, only_visible: bool) -> None:
+    def __init__(self, caps: Capabilities, tell: Callable[[Any, int], Any]) -> None:
         super().__init__(caps)
-        self.only_visible = only_visible
+        self.tell = tell
 
     def reset(self, task: Any) -> None:
         super().reset(task)
-        self.tracker = _Truth(task.n_rays, self.only_visible)  # type: ignore[assignment]
+        self.tracker = self.tell(self.tracker, task.n_rays)
 
     def act(self, obs: Observation) -> np.ndarray:
         self.tracker.obs = obs  # type: ignore[attr-defined]
@@ -156,22 +162,6 @@ class _Corrected:
         return np.ascontiguousarray(rows)
 
 
-class PartTruth(PredictiveAgent):
-    """copi-predictive with one thing of its perception put right (:class:`_Corrected`)."""
-
-    def __init__(self, caps: Capabilities, part: str) -> None:
-        super().__init__(caps)
-        self.part = part
-
-    def reset(self, task: Any) -> None:
-        super().reset(task)
-        self.tracker = _Corrected(self.tracker, task.n_rays, self.part)  # type: ignore[assignment]
-
-    def act(self, obs: Observation) -> np.ndarray:
-        self.tracker.obs = obs  # type: ignore[attr-defined]
-        return super().act(obs)
-
-
 class VisibleOracle(ModelOracle):
     """The model-oracle told only the discs its reading hits (arm 4)."""
 
@@ -192,18 +182,14 @@ def arm(k: int, caps_path: str, n: int) -> list[bool]:
     if k == 0:
         agent: Any = PredictiveAgent(caps)
     elif k >= len(ARMS):
-        agent = PartTruth(caps, PARTS[k - len(ARMS)])
+        agent = Told(caps, partial(_Corrected, part=PARTS[k - len(ARMS)]))
     elif k in (1, 2):
-        agent = TruthPredictive(caps, only_visible=k == 1)
+        agent = Told(caps, partial(_Truth, only_visible=k == 1))
     else:
         agent = VisibleOracle() if k == 3 else ModelOracle()
     level = "map" if k == 0 else "oracle"  # the truth read at level oracle
     return [e.run(agent, sensing=level).outcome == "success"
             for e in drawn_episodes("crowd", n, SEED)]  # fmt: skip
-
-
-def _interval(d: Any) -> str:
-    return f"{100 * d.estimate:+.1f} [{100 * d.low:+.1f}, {100 * d.high:+.1f}]"
 
 
 def main() -> None:
@@ -244,8 +230,8 @@ def main() -> None:
     for k, name in enumerate(ARMS):
         d = paired_difference(won[k], won[0])
         s = paired_difference(won[k], won[k - 1]) if k else None
-        delta = "—" if k == 0 else _interval(d)
-        step = "—" if s is None else _interval(s)
+        delta = "—" if k == 0 else interval(d)
+        step = "—" if s is None else interval(s)
         lines.append(f"| {name} | {told[k]} | {100 * np.mean(won[k]):.1f} % | {delta} | {step} |")
     lines += [
         "", "## Which part of its perception",
@@ -267,7 +253,7 @@ def main() -> None:
     for q, part in enumerate(PARTS):
         w = won[len(ARMS) + q]
         lines.append(f"| {part} | {100 * np.mean(w):.1f} % | "
-                     f"{_interval(paired_difference(w, won[0]))} |")  # fmt: skip
+                     f"{interval(paired_difference(w, won[0]))} |")  # fmt: skip
     lines.append("")
     Path(a.out).write_text("\n".join(lines))
     print("\n".join(lines))

@@ -73,6 +73,22 @@ def visible(obs: Observation, n_rays: int) -> np.ndarray:
     return (np.abs(gap) < 1e-6).any(axis=0)
 
 
+def pair_up(bodies: np.ndarray, discs: np.ndarray, within: float = 0.8) -> dict[int, int]:
+    """Bodies made out (k, 2) matched to discs (m, 2): each body to the nearest disc centre
+    within ``within``, nearest pairs first; {disc index: body index}."""
+    dist = np.hypot(*(bodies[:, None, :] - discs[None, :, :]).transpose(2, 0, 1))
+    pairs = sorted((dist[i, j], i, j) for i in range(len(bodies)) for j in range(len(discs))
+                   if dist[i, j] < within)  # fmt: skip
+    body_of: dict[int, int] = {}
+    used: set[int] = set()
+    for _, i, j in pairs:
+        if j in body_of or i in used:
+            continue
+        body_of[j] = i
+        used.add(i)
+    return body_of
+
+
 class _Truth:
     """A tracker that is told: the bodies are the true discs of the last observation
     (all, or those its reading hits), as rows (x, y, heading, known, speed, radius); the
@@ -101,8 +117,8 @@ class Told(PredictiveAgent):
     or :class:`_Corrected`), handed each observation before the decision: the arms that
     read the simulator's truth."""
 
-    def __init__(self, caps: Capabilities, tell: Callable[[Any, int], Any]) -> None:
-        super().__init__(caps)
+    def __init__(self, caps: Capabilities, tell: Callable[[Any, int], Any], seed: int = 0) -> None:
+        super().__init__(caps, seed=seed)
         self.tell = tell
 
     def reset(self, task: Any) -> None:
@@ -134,16 +150,8 @@ class _Corrected:
         rows = self.inner.bodies().copy()
         d = np.asarray(self.obs.obstacles, dtype=np.float64).reshape(-1, 5)
         d = d[visible(self.obs, self.n_rays)]
-        dist = np.hypot(*(rows[:, None, :2] - d[None, :, :2]).transpose(2, 0, 1))
-        pairs = sorted((dist[i, j], i, j) for i in range(len(rows)) for j in range(len(d))
-                       if dist[i, j] < 0.8)  # fmt: skip
-        body_of: dict[int, int] = {}
-        used: set[int] = set()
-        for _, i, j in pairs:
-            if j in body_of or i in used:
-                continue
-            body_of[j] = i
-            used.add(i)
+        body_of = pair_up(rows[:, :2], d[:, :2])
+        used = set(body_of.values())
         every = self.part == "all"
         for j, i in body_of.items():
             if self.part == "place" or every:
@@ -176,17 +184,18 @@ class VisibleOracle(ModelOracle):
                                        static=obs.static, obstacles=d))  # fmt: skip
 
 
-def arm(k: int, caps_path: str, n: int) -> list[bool]:
-    """Arm ``k``'s success on each of the first ``n`` episodes."""
+def arm(k: int, caps_path: str, n: int, draw: int = 0) -> list[bool]:
+    """Arm ``k``'s success on each of the first ``n`` episodes, its futures drawn from
+    the seed ``draw`` (the agents' ``seed``; 0 as registered)."""
     caps = Capabilities.load(caps_path)
     if k == 0:
-        agent: Any = PredictiveAgent(caps)
+        agent: Any = PredictiveAgent(caps, seed=draw)
     elif k >= len(ARMS):
-        agent = Told(caps, partial(_Corrected, part=PARTS[k - len(ARMS)]))
+        agent = Told(caps, partial(_Corrected, part=PARTS[k - len(ARMS)]), seed=draw)
     elif k in (1, 2):
-        agent = Told(caps, partial(_Truth, only_visible=k == 1))
+        agent = Told(caps, partial(_Truth, only_visible=k == 1), seed=draw)
     else:
-        agent = VisibleOracle() if k == 3 else ModelOracle()
+        agent = VisibleOracle(seed=draw) if k == 3 else ModelOracle(seed=draw)
     level = "map" if k == 0 else "oracle"  # the truth read at level oracle
     return [e.run(agent, sensing=level).outcome == "success"
             for e in drawn_episodes("crowd", n, SEED)]  # fmt: skip
@@ -195,23 +204,32 @@ def arm(k: int, caps_path: str, n: int) -> list[bool]:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--episodes", type=int, default=300, help="crowd episodes (seed 2)")
+    ap.add_argument("--draws", type=int, default=1,
+                    help="seeds of the futures each arm runs with (an episode's success: "
+                         "the share of them it won)")  # fmt: skip
     ap.add_argument("--caps", default="results/tuning/capabilities-predictive.npz")
     ap.add_argument("--out", default="docs/predictive-gap.md")
     a = ap.parse_args()
+    if a.episodes < 1 or a.draws < 1:
+        ap.error(f"--episodes and --draws must be at least 1; got {a.episodes} and {a.draws}")
     caps_path = str(predictive_capabilities(a.caps))
     t0 = time.perf_counter()
     with ProcessPoolExecutor(2) as pool:
-        runs = [pool.submit(arm, k, caps_path, a.episodes) for k in range(len(ARMS) + len(PARTS))]
-        won = [r.result() for r in runs]
+        runs = [[pool.submit(arm, k, caps_path, a.episodes, d) for d in range(a.draws)]
+                for k in range(len(ARMS) + len(PARTS))]  # fmt: skip
+        won = [np.mean([r.result() for r in rs], axis=0) for rs in runs]
     minutes = (time.perf_counter() - t0) / 60
     n = len(won[0])
+    draws = (f" with {a.draws} seeds of the futures each (an episode counts the share of "
+             f"them it won)" if a.draws > 1 else "")
     lines = [
         "# Where copi-predictive's distance to the model-oracle lies",
         "",
         "<!-- generated: written whole by studies/predictive_gap.py -->",
         "",
-        f"`python studies/predictive_gap.py --episodes {a.episodes}` ({minutes:.0f} min on "
-        f"2 cores). Five arms on the same {n} crowd episodes (seed {SEED}: no method was "
+        f"`python studies/predictive_gap.py --episodes {a.episodes}"
+        f"{f' --draws {a.draws}' if a.draws > 1 else ''}` ({minutes:.0f} min on "
+        f"2 cores). Five arms on the same {n} crowd episodes{draws} (seed {SEED}: no method was "
         "tuned on it and no benchmark table comes from it), each told one thing more than "
         "the one before it: copi-predictive as registered (level `map`); the same with its "
         "tracker's bodies replaced by the true centre, heading, speed and radius of every "

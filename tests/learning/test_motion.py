@@ -27,7 +27,7 @@ from copi.learning import (
     sample_motion,
 )
 from copi.learning._motion import _GUIDE, _draw, _draw_row, _edge_bin, _guides, _speed_in
-from copi.learning._tracking import JOIN, _gaps, _median
+from copi.learning._tracking import HIST, JOIN, _gaps, _median
 from copi.world import RangeSensor, World
 
 
@@ -252,6 +252,29 @@ def test_the_tracker_follows_a_body_and_measures_its_speed() -> None:
     assert abs(t.speed - 6.0 * math.sin(step / 2)) < 0.05
     turn = (body[2] - (step * 6.5 + math.pi / 2) + math.pi) % (2 * math.pi) - math.pi
     assert abs(turn) < 0.15  # the last chord's heading
+
+
+def test_a_followed_body_keeps_its_id_and_its_last_fits() -> None:
+    room = World([[0, 0], [30, 0], [30, 30], [0, 30]])
+    sensor = RangeSensor()
+    me = np.array([15.0, 15.0])
+    static = sensor.scan(room, me, np.zeros((0, 2)), np.zeros(0))
+    t = MotionTracker(sensor.n_rays, sensor.max_range, speed=0.5)
+    ids, fits = set(), []
+    for k in range(7):  # one body walking east, 0.5 a step; a second one from step 5
+        c = np.array([[13.5 + 0.5 * k, 17.5]] + ([[17.5, 12.5]] if k >= 5 else []))
+        t.update(sensor.scan(room, me, c, np.full(len(c), 0.9)), static, me)
+        tracks = t.tracks()
+        assert len(tracks) == len(t.bodies()) == len(c)
+        for (_, last, rays), body in zip(tracks, t.bodies(), strict=True):
+            assert np.array_equal(last[-1], body[:2]) and rays >= 1
+        first = min(tracks, key=lambda tr: math.dist(tr[1][-1], c[0]))
+        ids.add(first[0])
+        fits.append(first[1][-1])
+    assert len(ids) == 1  # followed all along: one id
+    (_, last, _), other = sorted(t.tracks(), key=lambda tr: tr[1][-1][1], reverse=True)
+    assert len(last) == HIST and np.array_equal(last, np.array(fits[-HIST:]))
+    assert len(other[1]) == 2 and other[0] not in ids  # seen twice, an id of its own
 
 
 def _side_by_side(rng: np.random.Generator, me: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -18,7 +18,7 @@ from copi.core import EXPLAINED
 from copi.errors import InvalidArgumentError
 from copi.geometry import ring_angles
 
-__all__ = ["JOIN", "MAD", "RADII", "WELL", "MotionTracker", "detect_discs", "fit_circle"]
+__all__ = ["HIST", "JOIN", "MAD", "RADII", "WELL", "MotionTracker", "detect_discs", "fit_circle"]
 
 RADII = (0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0)
 """Radii tried on an arc of :data:`WELL` rays or more."""
@@ -279,6 +279,8 @@ def _median(ordered: list[float]) -> float:
     return (ordered[k // 2 - 1] + ordered[k // 2]) / 2
 
 
+HIST = 4
+"""Fits a track keeps (its centre in the last readings, oldest first)."""
 MIN_SPEED_SAMPLES = 5
 MIN_TURN_SAMPLES = 20
 MAD = 1.4826
@@ -344,6 +346,7 @@ class MotionTracker:
         self.ahead = ahead
         self.split = check_flag(split, "split")
         self._tracks: list[dict[str, Any]] = []
+        self._next_id = 0
         # what its tracks measured: displacements, heading changes, radii
         self._speeds: list[float] = []
         self._turns: list[float] = []
@@ -442,17 +445,26 @@ class MotionTracker:
                 "c": C[di].copy(), "rays": int(rays[di]), "known": known,
                 "v": disp / length * speed if known else np.zeros(2),
                 "heading": heading if measured else None, "length": length,
+                "id": t["id"], "hist": [*t["hist"][1 - HIST:], C[di].copy()],
             }  # fmt: skip
         for di in range(len(C)):
             if new[di] is None:  # first seen: heading unknown
                 new[di] = {"c": C[di].copy(), "rays": int(rays[di]), "known": False,
-                           "v": np.zeros(2), "heading": None, "length": 0.0}  # fmt: skip
+                           "v": np.zeros(2), "heading": None, "length": 0.0,
+                           "id": self._next_id, "hist": [C[di].copy()]}  # fmt: skip
+                self._next_id += 1
         self._tracks = [t for t in new if t is not None]
         self._radius = np.asarray(R, dtype=np.float64)
         out = np.zeros((len(C), 5))
         for i, t in enumerate(self._tracks):
             out[i, :2], out[i, 2:4], out[i, 4] = t["c"], t["v"], R[i]
         return out
+
+    def tracks(self) -> list[tuple[int, NDArray[np.float64], int]]:
+        """The bodies of the last reading as tracks, in :meth:`bodies`' order: (its id,
+        the same while the body is followed; its last :data:`HIST` fitted centres, (k,
+        2), oldest first; the rays on it now)."""
+        return [(t["id"], np.array(t["hist"]), t["rays"]) for t in self._tracks]
 
     def bodies(self) -> NDArray[np.float64]:
         """The bodies of the last reading as :func:`sample_motion` reads them: rows (x, y,

@@ -420,7 +420,7 @@ class MotionTracker:
         per_d = np.bincount([di for _, _, di in pairs], minlength=len(C))
         used_t: set[int] = set()
         new: list[dict[str, Any] | None] = [None] * len(C)  # a track per detection
-        for _, ti, di in pairs:
+        for _, ti, di in self._chosen(pairs, len(tracks), len(C)):
             if ti in used_t or new[di] is not None:
                 continue
             used_t.add(ti)
@@ -459,6 +459,15 @@ class MotionTracker:
         for i, t in enumerate(self._tracks):
             out[i, :2], out[i, 2:4], out[i, 4] = t["c"], t["v"], R[i]
         return out
+
+    def _chosen(
+        self, pairs: list[tuple[float, int, int]], n_tracks: int, n_found: int
+    ) -> list[tuple[float, int, int]]:
+        """The candidate matches (cost, track, body), cheapest first, that :meth:`update`
+        takes in turn, each unless its track or body is taken already: all of them
+        (nearest first). A study's tracker may choose otherwise
+        (studies/predictive_perception.py assigns them globally)."""
+        return pairs
 
     def tracks(self) -> list[tuple[int, NDArray[np.float64], int]]:
         """The bodies of the last reading as tracks, in :meth:`bodies`' order: (its id,

@@ -1,6 +1,6 @@
 """Where copi-predictive's distance to the model-oracle lies: docs/predictive-gap.md.
 
-    python studies/predictive_gap.py --episodes 300
+    python studies/predictive_gap.py --episodes 800 --draws 2
 
 copi-predictive plans with the model-oracle's planner; what it lacks is what the oracle
 is told. Five arms run on the same crowd episodes (seed 2: no method was tuned on it, and
@@ -18,9 +18,11 @@ no table of the benchmark comes from it), each told one thing more than the one 
 So 1 → 2 is what the tracker's perception costs, 2 → 3 what the discs out of sight cost,
 3 → 5 what the learnt model and copi's settings cost beside the true law and the
 oracle's; 4 gives the oracle's own loss to the discs out of sight. Each arm's success is
-paired with copi-predictive's on the same episodes (95 % bootstrap intervals). The arms
-are measuring instruments (they read the simulator's truth at level ``oracle``), not
-methods.
+paired with copi-predictive's on the same episodes (95 % bootstrap intervals); with
+``--draws`` k, every arm runs each episode with k seeds of its futures and an episode
+counts the share of them it won (the draws' own noise, several points on 400 episodes of
+one draw, averaged down). The arms are measuring instruments (they read the simulator's
+truth at level ``oracle``), not methods.
 
 A second table puts right one thing of its tracker's bodies at a time (:data:`PARTS`):
 their places and radii, their headings and speeds, the discs it missed, the bodies that

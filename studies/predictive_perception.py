@@ -136,6 +136,10 @@ def features(fits: np.ndarray, rays: int, radius: float, pos: np.ndarray) -> np.
 
 ACROSS = [2, 5, 8]
 """The inputs that change sign in a mirror across the last displacement."""
+BEFORE = [3, 6]
+"""The inputs that say whether the track has a second and a third displacement."""
+RAYS = 9
+"""The input of the rays on the body (over 8)."""
 
 
 def _mirrored(X: np.ndarray, Y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -171,9 +175,9 @@ def examples(rec: list[dict[str, Any]]) -> dict[str, Any]:
             X.append(features(fits, rays, row[5], r["pos"]))
             d = after[tid] - fits[-1] if tid in after else np.full(2, np.nan)
             nxt.append([d @ u, d @ w])
-            truth.append([math.cos(heading) * u[0] + math.sin(heading) * u[1],
-                          math.cos(heading) * w[0] + math.sin(heading) * w[1]])  # fmt: skip
-            err.append(abs((row[2] - heading + math.pi) % (2 * math.pi) - math.pi))
+            v = np.array([math.cos(heading), math.sin(heading)])
+            truth.append([v @ u, v @ w])
+            err.append(float(_off(row[2], heading)))
             short.append(rays < WELL or rays_before.get(tid, 0) < WELL)
             was = np.hypot(*(before["discs"][:, :2] - fits[-2]).T)
             swap.append(int(was.argmin()) != seen[j] and was[seen[j]] > SWAP)
@@ -210,8 +214,8 @@ def filters(train: dict[str, Any], test: dict[str, Any]) -> dict[str, np.ndarray
     out = {"the tracker: its last displacement": test["error"]}
     ok = np.isfinite(train["next"]).all(axis=1)
     Xs, Ys = _mirrored(train["X"][ok], train["next"][ok])
-    depth = 1 + Xs[:, 3] + Xs[:, 6]  # displacements the track has
-    depth_t = 1 + test["X"][:, 3] + test["X"][:, 6]
+    depth = 1 + Xs[:, BEFORE].sum(axis=1)  # displacements the track has
+    depth_t = 1 + test["X"][:, BEFORE].sum(axis=1)
     pred = np.zeros((len(test["X"]), 2))
     for h in (1, 2, 3):  # a linear filter per length of history
         m, mt = depth == h, depth_t == h
@@ -227,8 +231,13 @@ def filters(train: dict[str, Any], test: dict[str, Any]) -> dict[str, np.ndarray
     return out
 
 
+def _off(a: Any, b: Any) -> Any:
+    """How far the angles ``a`` are from ``b``, radians in [0, pi]."""
+    return np.abs((np.asarray(a) - b + math.pi) % (2 * math.pi) - math.pi)
+
+
 def _angle(pred: np.ndarray, true: np.ndarray) -> np.ndarray:
-    return np.abs((_heading(pred) - true + math.pi) % (2 * math.pi) - math.pi)
+    return np.asarray(_off(_heading(pred), true))
 
 
 def _row(name: str, e: np.ndarray, sets: list[np.ndarray]) -> str:
@@ -258,8 +267,8 @@ def main() -> None:
     sets = [~short & ~swap, short & ~swap, swap]
     n = [int(s.sum()) for s in sets]
     followed = int(np.isfinite(train["next"]).all(axis=1).sum())
-    rays = np.rint(test["X"][:, 9] * 8)
-    first = test["X"][:, 3] == 0  # a track's first displacement: no heading before it
+    rays = np.rint(test["X"][:, RAYS] * 8)
+    first = test["X"][:, BEFORE[0]] == 0  # a track's first displacement: no heading before it
     cmd = (f"python studies/predictive_perception.py --worlds {a.worlds} --test-worlds "
            f"{a.test_worlds} --steps {a.steps}")  # fmt: skip
     lines = [

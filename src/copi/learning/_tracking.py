@@ -441,17 +441,19 @@ class MotionTracker:
                         room = self.ahead(t["c"], t["heading"], float(R[di]))
                         self.examples.append((room, turn, t["length"], length))
             known = length > 0.2
+            c = C[di].copy()
             new[di] = {
-                "c": C[di].copy(), "rays": int(rays[di]), "known": known,
+                "c": c, "rays": int(rays[di]), "known": known,
                 "v": disp / length * speed if known else np.zeros(2),
                 "heading": heading if measured else None, "length": length,
-                "id": t["id"], "hist": [*t["hist"][1 - HIST:], C[di].copy()],
+                "id": t["id"], "hist": [*t["hist"][1 - HIST:], c],
             }  # fmt: skip
         for di in range(len(C)):
             if new[di] is None:  # first seen: heading unknown
-                new[di] = {"c": C[di].copy(), "rays": int(rays[di]), "known": False,
+                c = C[di].copy()
+                new[di] = {"c": c, "rays": int(rays[di]), "known": False,
                            "v": np.zeros(2), "heading": None, "length": 0.0,
-                           "id": self._next_id, "hist": [C[di].copy()]}  # fmt: skip
+                           "id": self._next_id, "hist": [c]}  # fmt: skip
                 self._next_id += 1
         self._tracks = [t for t in new if t is not None]
         self._radius = np.asarray(R, dtype=np.float64)

@@ -6,6 +6,8 @@ committed as it comes back, so that an interrupted run resumes where it stopped
 from __future__ import annotations
 
 import os
+import signal
+import threading
 from collections.abc import Callable, Iterator
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
@@ -81,6 +83,31 @@ def _from_ctrl_c(exc: BaseException) -> bool:
     return False
 
 
+@contextmanager
+def ctrl_c_remembered() -> Iterator[Callable[[], bool]]:
+    """Within: whether Ctrl-C (SIGINT) was pressed, as a callable. Python's own handler
+    raises a KeyboardInterrupt wherever the main thread is, which code of another
+    package may catch and drop (a run was once seen going on for a minute after
+    Ctrl-C); so the handler here also notes the press, for the loop to check between
+    items. Only Python's default handler is replaced, and only in the main thread: an
+    ignored SIGINT (a background job) or a caller's own handler stays as it was."""
+    presses: list[int] = []
+    if (threading.current_thread() is not threading.main_thread()
+            or signal.getsignal(signal.SIGINT) is not signal.default_int_handler):  # fmt: skip
+        yield lambda: False
+        return
+
+    def noted(signum: int, frame: Any) -> None:
+        presses.append(signum)
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGINT, noted)
+    try:
+        yield lambda: bool(presses)
+    finally:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
 MAX_EPISODES = 100_000
 """Most episodes (or games) a run may ask for per family: at a tenth of a second each,
 three hours a method; more is a typing error, refused before anything is written."""
@@ -108,10 +135,14 @@ def execute(
     (``one(config, item)``), or on a local pool or a Dask cluster in chunks of at most
     ``chunk`` (``many(config, items)``, which must pickle). On any exception the chunks
     not started are cancelled; ``stopping`` wraps the whole (e.g. the one-line Ctrl-C
-    message)."""
-    with stopping:
+    message). A Ctrl-C is also remembered (:func:`ctrl_c_remembered`) and stops the run
+    at the next item or chunk, should the KeyboardInterrupt it raised have been swallowed
+    on its way out."""
+    with stopping, ctrl_c_remembered() as pressed:
         if isinstance(pool, InlineExecutor):
             for item in items:
+                if pressed():
+                    raise KeyboardInterrupt
                 commit(one(config, item))
             return
         n_workers = workers if isinstance(pool, ProcessPoolExecutor) else 4
@@ -122,6 +153,8 @@ def execute(
         try:
             for fut in as_completed(futures):
                 commit(fut.result())
+                if pressed():
+                    raise KeyboardInterrupt
         except BaseException:
             for fut in futures:
                 fut.cancel()

@@ -20,6 +20,7 @@ __all__ = [
     "PluginWarning",
     "ResultsError",
     "WorldFileError",
+    "ctrl_c_behind",
 ]
 
 
@@ -87,3 +88,17 @@ class Interrupted(KeyboardInterrupt):
     """A run stopped by Ctrl-C (SIGINT), after committing what had finished; the message
     says what is saved and how to resume. A KeyboardInterrupt, so that it stops callers
     as Ctrl-C does."""
+
+
+def ctrl_c_behind(exc: BaseException) -> KeyboardInterrupt | None:
+    """The KeyboardInterrupt that ``exc`` is, or was raised while handling (numba reports
+    a Ctrl-C that lands inside a compiled call as a SystemError whose context it is);
+    None if there is none."""
+    met: set[int] = set()  # a chain may loop
+    seen: BaseException | None = exc
+    while seen is not None and id(seen) not in met:
+        if isinstance(seen, KeyboardInterrupt):
+            return seen
+        met.add(id(seen))
+        seen = seen.__cause__ or seen.__context__
+    return None

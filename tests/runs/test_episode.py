@@ -9,7 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from copi.errors import InvalidArgumentError
+from copi.core import Agent
+from copi.errors import InvalidArgumentError, MethodError
 from copi.experiments import BenchmarkConfig, NavigationConfig, evaluate, run_benchmark
 from copi.methods import make_agent
 from copi.results import EpisodeRow, ResultsStore
@@ -69,3 +70,52 @@ def test_a_method_s_weights_are_not_taken_for_its_family_s_data(tmp_path: Path) 
     resolved = config.resolved()
     assert resolved.inputs == {} and set(resolved.method_inputs) == {"weights_sha"}
     assert stored.config["weights_sha"] == resolved.method_inputs["weights_sha"]
+
+
+class _CtrlCInCompiledCall(Agent):
+    """As numba reports a Ctrl-C that lands inside a compiled call: a SystemError raised
+    while the KeyboardInterrupt was being handled."""
+
+    name = "ctrl-c-in-numba"
+
+    def __init__(self, where: str) -> None:
+        self.where = where
+
+    def _pressed(self) -> None:
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt:
+            raise SystemError("returned a result with an exception set") from None
+
+    def reset(self, task: object) -> None:
+        if self.where == "reset":
+            self._pressed()
+
+    def act(self, obs: object) -> np.ndarray:
+        if self.where == "act":
+            self._pressed()
+        return np.zeros(2)
+
+
+@pytest.mark.parametrize("where", ["reset", "act"])
+def test_a_ctrl_c_inside_a_method_s_compiled_call_is_the_user_s_not_the_method_s(
+    where: str,
+) -> None:
+    ep = Episode.draw("star", 0, seed=0)
+    with pytest.raises(KeyboardInterrupt):
+        ep.run(_CtrlCInCompiledCall(where), sensing="map")
+    with pytest.raises(MethodError, match="act at step 1"):  # a SystemError of its own
+        ep.run(_Raising(SystemError("its own")), sensing="map")
+
+
+class _Raising(Agent):
+    name = "raising"
+
+    def __init__(self, exc: BaseException) -> None:
+        self.exc = exc
+
+    def reset(self, task: object) -> None:
+        pass
+
+    def act(self, obs: object) -> np.ndarray:
+        raise self.exc

@@ -242,3 +242,29 @@ def test_map_obstacles_fit_their_passages() -> None:
         assert 0 < lo <= hi <= 1.0
         names.add(world.name.split("-x")[0])
     assert len(names) >= 5  # windows come from many maps
+
+
+def test_a_ctrl_c_inside_a_sampler_s_compiled_call_is_not_the_sampler_s_error() -> None:
+    """numba reports a Ctrl-C that lands in a compiled call as a SystemError raised while
+    handling it: that is the user's stop, passed on, not a broken sampler."""
+    from copi.world import register_family, unregister_family
+
+    def pressed(rng: np.random.Generator, *, name: str | None = None) -> None:
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt:
+            raise SystemError("returned a result with an exception set") from None
+
+    def broken(rng: np.random.Generator, *, name: str | None = None) -> None:
+        raise SystemError("its own")
+
+    register_family("fz-pressed", pressed, summary="a sampler that meets a Ctrl-C")
+    register_family("fz-own", broken, summary="a sampler with a SystemError of its own")
+    try:
+        with pytest.raises(SystemError, match="exception set"):
+            sample_world("fz-pressed", 0)
+        with pytest.raises(InvalidArgumentError, match="raised SystemError: its own"):
+            sample_world("fz-own", 0)
+    finally:
+        unregister_family("fz-pressed")
+        unregister_family("fz-own")

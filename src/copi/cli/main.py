@@ -25,7 +25,7 @@ except ImportError:  # pragma: no cover - older typer, on click itself
     from click import exceptions as _click  # type: ignore[no-redef]
 
 from copi.cli._common import app, console
-from copi.errors import CopiError, PluginWarning
+from copi.errors import CopiError, PluginWarning, ctrl_c_behind
 
 # Importing a group's module registers its commands; this order is the order of --help.
 for _group in ("world", "learning", "experiments", "watch", "rl", "crowd"):
@@ -72,17 +72,6 @@ def _threads_left() -> bool:
     )  # fmt: skip
 
 
-def _ctrl_c_inside(exc: BaseException) -> KeyboardInterrupt | None:
-    """The KeyboardInterrupt behind ``exc`` (numba reports a Ctrl-C that lands inside a
-    compiled call as a SystemError), or None."""
-    seen: BaseException | None = exc
-    while seen is not None:
-        if isinstance(seen, KeyboardInterrupt):
-            return seen
-        seen = seen.__cause__ or seen.__context__
-    return None
-
-
 _PATH_OPTIONS = frozenset({"-o", "--output", "--checkpoints", "--maps", "--from-maps"})
 """Options naming a directory or a file to write, where "." is a sensible value."""
 
@@ -126,7 +115,7 @@ def main(argv: list[str] | None = None) -> None:
     except typer.Exit as exc:
         sys.exit(exc.exit_code)
     except typer.Abort as exc:
-        _interrupted(_ctrl_c_inside(exc))
+        _interrupted(ctrl_c_behind(exc))
     except _click.ClickException as exc:  # usage errors: bad options, missing arguments
         ctx = getattr(exc, "ctx", None)
         where = f"{ctx.command_path}: " if ctx is not None else ""
@@ -154,7 +143,7 @@ def main(argv: list[str] | None = None) -> None:
     except KeyboardInterrupt as exc:
         _interrupted(exc)
     except SystemError as exc:
-        stop = _ctrl_c_inside(exc)
+        stop = ctrl_c_behind(exc)
         if stop is None:
             raise
         _interrupted(stop)

@@ -22,7 +22,13 @@ import numpy as np
 from copi._files import write_text
 from copi.baselines import OBSERVATION, PolicyWeights, PPOAgent, load_policy, save_policy
 from copi.envs.local_policy import LocalPolicyEnv
-from copi.errors import CopiError, Interrupted, InvalidArgumentError, InvalidWorldError
+from copi.errors import (
+    CopiError,
+    Interrupted,
+    InvalidArgumentError,
+    InvalidWorldError,
+    ctrl_c_behind,
+)
 from copi.experiments import PursuitConfig, run_game
 from copi.reports import finish_figure, new_figure
 from copi.rl._checkpoint import (
@@ -303,8 +309,8 @@ def train(
             record()
     except BaseException as exc:
         # a Ctrl-C that lands in a compiled call of the validation comes out as the
-        # SystemError numba makes of it, which the episode reports as the method's error
-        if not _ctrl_c_behind(exc):
+        # SystemError numba makes of it
+        if ctrl_c_behind(exc) is None:
             raise
         raise Interrupted(_what_is_saved(config, ckpt, checkpointed, validate_every)) from None
     seconds = elapsed0 + time.perf_counter() - t0
@@ -360,7 +366,7 @@ def _train_clone(config: TrainConfig, out: Path, *, validation_episodes: int, co
             imitating=imitating, info=info, keep=keep,
         )  # fmt: skip
     except BaseException as exc:
-        if not _ctrl_c_behind(exc):
+        if ctrl_c_behind(exc) is None:
             raise
         raise Interrupted("nothing saved (a clone's rounds are not checkpointed); rerun the "
                           "same command") from None  # fmt: skip
@@ -379,18 +385,6 @@ def _train_clone(config: TrainConfig, out: Path, *, validation_episodes: int, co
     _curve_figure(curve, figure_path, title=out.stem,
                   xlabel="states demonstrated (one point a DAgger round)")  # fmt: skip
     return summary
-
-
-def _ctrl_c_behind(exc: BaseException) -> bool:
-    """Whether ``exc`` is a KeyboardInterrupt or was raised while handling one."""
-    seen: set[int] = set()
-    cause: BaseException | None = exc
-    while cause is not None and id(cause) not in seen:
-        if isinstance(cause, KeyboardInterrupt):
-            return True
-        seen.add(id(cause))
-        cause = cause.__cause__ or cause.__context__
-    return False
 
 
 def _what_is_saved(config: TrainConfig, ckpt: Path | None, checkpointed: int,

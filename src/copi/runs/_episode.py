@@ -14,7 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from copi.core import Agent, Observation, Sensing, Task, check_sensing
-from copi.errors import CopiError, InvalidArgumentError, MethodError
+from copi.errors import CopiError, InvalidArgumentError, MethodError, ctrl_c_behind
 from copi.online import Steering
 from copi.planning import length_error_bound, shortest_path
 from copi.world import Simulator
@@ -70,7 +70,11 @@ def _shown(value: Any) -> str:
 
 def _broke(agent: Agent, what: str, exc: BaseException) -> MethodError:
     """The one-line error of a method whose ``what`` raised ``exc`` (its own error, an
-    exit it called, running out of memory: all of them the method's, not copi's)."""
+    exit it called, running out of memory: all of them the method's, not copi's). A
+    Ctrl-C behind ``exc`` (numba's SystemError) is raised instead: it is the user's."""
+    stop = ctrl_c_behind(exc)
+    if stop is not None:
+        raise stop
     if isinstance(exc, SystemExit):
         did = f"called sys.exit({exc.code!r})"
     else:

@@ -15,7 +15,7 @@ from contextlib import AbstractContextManager, contextmanager
 from dataclasses import dataclass
 from typing import Any
 
-from copi.errors import Interrupted
+from copi.errors import Interrupted, ctrl_c_behind
 from copi.results import ResultsStore
 from copi.runs._executor import ExecutorError, InlineExecutor, make_executor
 from copi.runs._inputs import run_id
@@ -66,21 +66,12 @@ def stops_cleanly(
             f"{unit} saved in {output}; rerun the same command to resume"
         ) from None
     except (KeyboardInterrupt, SystemError) as exc:
-        if isinstance(exc, SystemError) and not _from_ctrl_c(exc):
+        if isinstance(exc, SystemError) and ctrl_c_behind(exc) is None:
             raise
         raise Interrupted(
             f"{stored()}/{tally.total} {unit} saved in {output}; rerun the same command to "
             "resume"
         ) from None
-
-
-def _from_ctrl_c(exc: BaseException) -> bool:
-    seen = exc.__cause__ or exc.__context__
-    while seen is not None:
-        if isinstance(seen, KeyboardInterrupt):
-            return True
-        seen = seen.__cause__ or seen.__context__
-    return False
 
 
 @contextmanager

@@ -14,7 +14,7 @@ from shapely.geometry import LineString
 from copi._plugins import Registry, origin_of, replaced_origin
 from copi._rng import Seed, as_generator
 from copi._validation import as_vector
-from copi.errors import CopiError, InvalidArgumentError
+from copi.errors import CopiError, InvalidArgumentError, ctrl_c_behind
 from copi.world._family_crowdnav import (
     CROWDNAV,
     STEPS_PER_METRE,
@@ -258,6 +258,8 @@ def sample_world(
     except (KeyboardInterrupt, CopiError):
         raise
     except BaseException as exc:  # another package's sampler: its error, named as such
+        if ctrl_c_behind(exc) is not None:  # numba's SystemError for a Ctrl-C: the user's
+            raise
         did = f"called sys.exit({exc.code!r})" if isinstance(exc, SystemExit) else (
             f"raised {type(exc).__name__}" + (f": {exc}" if str(exc) else ""))  # fmt: skip
         raise InvalidArgumentError(f"the sampler of family {family!r} {did}") from None

@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Any
 
 __all__ = ["drawn_episodes", "finish_cost_figure", "kept_times", "predictive_capabilities",
-           "splice_section"]
+           "splice_section", "won_by_arm", "write_page"]
 
 
 def kept_times(path: Path, measured: dict[str, tuple[float, Any]]) -> dict[str, Any]:
@@ -91,3 +91,23 @@ def drawn_episodes(family: str, n: int, seed: int) -> list[Any]:
         except InvalidWorldError:
             continue
     return out
+
+
+def won_by_arm(arm: Any, arms: int, draws: int, *args: Any) -> list[Any]:
+    """Each arm's success per episode, the share of ``draws`` seeds of its futures it
+    won: ``arm(k, *args, draw)`` (a list of booleans, one per episode) for every arm k
+    < ``arms`` and draw, on two processes."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    import numpy as np
+
+    with ProcessPoolExecutor(2) as pool:
+        runs = [[pool.submit(arm, k, *args, d) for d in range(draws)] for k in range(arms)]
+        return [np.mean([r.result() for r in rs], axis=0) for rs in runs]
+
+
+def write_page(path: str | Path, lines: list[str]) -> None:
+    """Write a study's page (its lines, and a last empty one) and show it."""
+    Path(path).write_text("\n".join([*lines, ""]))
+    print("\n".join(lines))
+    print(f"wrote {path}")

@@ -36,7 +36,6 @@ import math
 import sys
 import time
 from collections.abc import Callable
-from concurrent.futures import ProcessPoolExecutor
 from functools import partial
 from pathlib import Path
 from typing import Any
@@ -51,7 +50,13 @@ from copi.geometry import ring_angles  # noqa: E402
 from copi.learning import Capabilities  # noqa: E402
 from copi.online import PredictiveAgent  # noqa: E402
 from copi.results import paired_difference  # noqa: E402
-from studies._common import drawn_episodes, interval, predictive_capabilities  # noqa: E402
+from studies._common import (  # noqa: E402
+    drawn_episodes,
+    interval,
+    predictive_capabilities,
+    won_by_arm,
+    write_page,
+)
 
 SEED = 2
 """Episodes of a seed no method was tuned on and no benchmark table reports."""
@@ -216,10 +221,7 @@ def main() -> None:
         ap.error(f"--episodes and --draws must be at least 1; got {a.episodes} and {a.draws}")
     caps_path = str(predictive_capabilities(a.caps))
     t0 = time.perf_counter()
-    with ProcessPoolExecutor(2) as pool:
-        runs = [[pool.submit(arm, k, caps_path, a.episodes, d) for d in range(a.draws)]
-                for k in range(len(ARMS) + len(PARTS))]  # fmt: skip
-        won = [np.mean([r.result() for r in rs], axis=0) for rs in runs]
+    won = won_by_arm(arm, len(ARMS) + len(PARTS), a.draws, caps_path, a.episodes)
     minutes = (time.perf_counter() - t0) / 60
     n = len(won[0])
     draws = (f" with {a.draws} seeds of the futures each (an episode counts the share of "
@@ -274,10 +276,7 @@ def main() -> None:
         w = won[len(ARMS) + q]
         lines.append(f"| {part} | {100 * np.mean(w):.1f} % | "
                      f"{interval(paired_difference(w, won[0]))} |")  # fmt: skip
-    lines.append("")
-    Path(a.out).write_text("\n".join(lines))
-    print("\n".join(lines))
-    print(f"wrote {a.out}")
+    write_page(a.out, lines)
 
 
 if __name__ == "__main__":

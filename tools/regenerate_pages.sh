@@ -52,6 +52,7 @@ $BIN/python tools/benchmark_page.py "$R/crowd-power" docs/benchmark-crowd-fresh.
     --command "\`copi benchmark -o results/crowd-power --families crowd --episodes 800 --seed 2 --methods $F --against tracked-mpc --workers 2\` ($(took "$t") on 2 cores, the predictive preset's capabilities learnt first)"
 $BIN/python studies/predictive_gap.py --episodes 800 --draws 2
 $BIN/python studies/predictive_perception.py
+$BIN/python studies/predictive_repairs.py --episodes 800 --draws 2
 
 t=$(date +%s)
 $BIN/copi benchmark -o "$R/bench-ablations" --episodes 500 --workers 2 --methods ablations

@@ -26,7 +26,15 @@ from copi.learning import (
     motion_tables,
     sample_motion,
 )
-from copi.learning._motion import _GUIDE, _draw, _draw_row, _edge_bin, _guides, _speed_in
+from copi.learning._motion import (
+    _GUIDE,
+    N_TURN,
+    _draw,
+    _draw_row,
+    _edge_bin,
+    _guides,
+    _speed_in,
+)
 from copi.learning._tracking import HIST, JOIN, _gaps, _median
 from copi.world import RangeSensor, World
 
@@ -378,3 +386,34 @@ def test_bad_tables_and_arguments_are_refused(model: MotionModel) -> None:
     for where in ([np.nan, 1.0], [1.0, 2.0, 3.0]):
         with pytest.raises(InvalidArgumentError, match="position must be two finite numbers"):
             MotionTracker(32, 10.0).update(ranges, ranges, where)
+
+
+def test_a_seventh_column_draws_a_body_s_first_turn_from_the_row_it_names(
+    model: MotionModel,
+) -> None:
+    """A row of ``turn_cdf`` named by a body's seventh column (a law of how far its
+    measured heading may be off) gives its first turn, the room's rows every later one;
+    -1, or no seventh column, is the room's law, bit for bit."""
+    room = World([[0, 0], [40, 0], [40, 40], [0, 40]])
+    segs = np.ascontiguousarray(room.segments)
+    turn, *rest = motion_tables(model)
+    quarter = np.zeros(N_TURN)
+    quarter[(3 * N_TURN) // 4] = 1.0  # every turn in the bin just past +90 degrees
+    tables = (np.ascontiguousarray(np.vstack([turn, np.cumsum(quarter)])), *rest)
+    six = np.array([[20.0, 20.0, 0.0, 1.0, 0.8, 0.5], [10.0, 30.0, 1.0, 1.0, 0.8, 0.5]])
+    seven = np.column_stack([six, [len(turn), -1]])
+    f = sample_motion(seven, segs, 64, 10, 3, *tables, np.zeros((1, 1)), 0.0, 0.0, 1.0)
+    first = np.arctan2(*(f[:, 1, 0] - f[:, 0, 0])[:, ::-1].T)
+    assert np.all((first > math.pi / 2 - 1e-9) & (first < math.pi / 2 + 2 * math.pi / N_TURN))
+    later = np.diff(np.unwrap(np.arctan2(*np.diff(f[:, :, 0], axis=1)[..., ::-1].transpose(2, 0, 1)),
+                              axis=1), axis=1)  # fmt: skip
+    assert np.abs(later).max() < math.pi and np.mean(np.abs(later) > 1.0) < 0.2  # the room's
+    base = sample_motion(np.ascontiguousarray(six), segs, 64, 10, 3, *tables, np.zeros((1, 1)),
+                         0.0, 0.0, 1.0)  # fmt: skip
+    assert np.array_equal(f[:, :, 1], base[:, :, 1])  # -1: the room's law
+    unknown = seven.copy()
+    unknown[0, 3] = 0.0  # a body with no heading starts anywhere: its column is not read
+    g = sample_motion(unknown, segs, 64, 10, 3, *tables, np.zeros((1, 1)), 0.0, 0.0, 1.0)
+    h = sample_motion(np.ascontiguousarray(unknown[:, :6]), segs, 64, 10, 3, *tables,
+                      np.zeros((1, 1)), 0.0, 0.0, 1.0)  # fmt: skip
+    assert np.array_equal(g, h)

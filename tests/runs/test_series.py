@@ -65,3 +65,17 @@ def test_an_ignored_or_own_ctrl_c_handler_is_left_alone() -> None:
             assert signal.getsignal(signal.SIGINT) is handler
         finally:
             signal.signal(signal.SIGINT, before)
+
+
+def test_the_ctrl_c_behind_an_error_is_found_through_its_chain_and_a_loop_ends() -> None:
+    from copi.errors import ctrl_c_behind
+
+    pressed = KeyboardInterrupt()
+    numba = SystemError("returned a result with an exception set")
+    numba.__context__ = pressed
+    outer = RuntimeError("wrapped")
+    outer.__cause__ = numba
+    assert ctrl_c_behind(outer) is pressed and ctrl_c_behind(pressed) is pressed
+    a, b = ValueError("a"), SystemError("b")
+    a.__context__, b.__context__ = b, a  # a chain that loops: no Ctrl-C in it
+    assert ctrl_c_behind(a) is None

@@ -182,8 +182,17 @@ _TURN_EDGES = np.linspace(-math.pi, math.pi, N_TURN + 1)
 
 
 def _walk_examples(
-    family: str, k: int, steps: int, seed: int, sensor: RangeSensor, agent_radius: float
+    family: str,
+    k: int,
+    steps: int,
+    seed: int,
+    sensor: RangeSensor,
+    agent_radius: float,
+    tracker_class: type[MotionTracker] = MotionTracker,
 ) -> tuple[list[tuple[float, float, float, float]], list[float]]:
+    """The examples and radii of a random walk of ``steps`` steps in world k of
+    ``family`` (see :func:`learn_motion`); its bodies followed by a ``tracker_class``
+    (a study's may learn more from the same walk)."""
     rng = np.random.default_rng([seed, k, 11])
     world = random_world(rng) if family == "star" else sample_world(family, rng)
     sim = Simulator.from_world(world, rng, agent_radius=agent_radius, sensor=sensor)
@@ -195,7 +204,7 @@ def _walk_examples(
         return float(min(sweep_one(c[0], c[1], math.cos(heading), math.sin(heading), local, r),
                          1e3))  # fmt: skip
 
-    tracker = MotionTracker(sensor.n_rays, sensor.max_range, ahead=ahead)
+    tracker = tracker_class(sensor.n_rays, sensor.max_range, ahead=ahead)
 
     none = np.zeros((0, 2))
     blocked = False
@@ -339,6 +348,9 @@ def sample_motion(  # type: ignore[no-untyped-def]
     distance it could go along its heading before a wall, binned by ``ahead_edges``),
     takes a speed drawn after its last one, and moves, a wall stopping it. A body whose
     heading is unknown starts at a uniform heading and a speed drawn from ``start_cdf``.
+    A seventh column, where ``bodies`` has one, names for each body a row of
+    ``turn_cdf`` its first turn is drawn from instead of the room's (-1: the room's):
+    a law of how far a heading measured so may be off.
 
     ``*_cdf``: cumulative tables (rows of the conditional laws); ``clear``: the distance
     to the walls on a grid (origin cx0, cy0, side ch), which spares the swept test of a
@@ -362,6 +374,7 @@ def sample_motion(  # type: ignore[no-untyped-def]
         y0 = bodies[k, 1]
         rk = bodies[k, 5]
         known = bodies[k, 3] > 0.5
+        first = int(bodies[k, 6]) if bodies.shape[1] > 6 and known else -1
         vmax = max(speed_edges[-1], bodies[k, 4]) if known else speed_edges[-1]
         reach = max(room_far, vmax) + rk + 1e-3
         around = local_segments(x0, y0, segs, horizon * vmax + reach)
@@ -388,7 +401,8 @@ def sample_motion(  # type: ignore[no-untyped-def]
                 if not far > room_far + rk:
                     room = sweep_one(x, y, math.cos(h), math.sin(h), local, rk)
                 a = _edge_bin(ahead_edges, room)
-                h += -math.pi + (_draw_row(turn_cdf, a, guide) + np.random.random()) * width
+                row = first if t == 0 and first >= 0 else a
+                h += -math.pi + (_draw_row(turn_cdf, row, guide) + np.random.random()) * width
                 if speed_cdf.shape[0] > 1:  # a speed drawn after the last (else: kept)
                     v = _speed_in(speed_edges, _draw(speed_cdf[_edge_bin(speed_edges, v)]))
                 dx = math.cos(h)

@@ -51,6 +51,7 @@ from copi.learning import Capabilities  # noqa: E402
 from copi.online import PredictiveAgent  # noqa: E402
 from copi.results import paired_difference  # noqa: E402
 from studies._common import (  # noqa: E402
+    FRESH_SEED,
     drawn_episodes,
     interval,
     predictive_capabilities,
@@ -58,8 +59,7 @@ from studies._common import (  # noqa: E402
     write_page,
 )
 
-SEED = 2
-"""Episodes of a seed no method was tuned on and no benchmark table reports."""
+SEED = FRESH_SEED
 ARMS = ("copi-predictive", "+ the visible discs' true state", "+ every disc's true state",
         "model-oracle, visible discs only", "model-oracle")  # fmt: skip
 PARTS = ("place", "heading", "missed", "phantoms", "all")

@@ -50,11 +50,12 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from copi.baselines import TrackedMPC  # noqa: E402
 from copi.learning import Capabilities, MotionTracker, motion_tables  # noqa: E402
 from copi.learning._motion import _TURN_EDGES, AHEAD_EDGES, N_TURN, _bin, _walk_examples  # noqa: E402
-from copi.learning._tracking import MAD, WELL  # noqa: E402
+from copi.learning._tracking import MAD  # noqa: E402
 from copi.online import PredictiveAgent  # noqa: E402
 from copi.results import paired_difference  # noqa: E402
 from copi.world import RangeSensor  # noqa: E402
 from studies._common import (  # noqa: E402
+    FRESH_SEED,
     drawn_episodes,
     interval,
     predictive_capabilities,
@@ -62,8 +63,7 @@ from studies._common import (  # noqa: E402
     write_page,
 )
 
-SEED = 2
-"""Episodes of a seed no method was tuned on and no benchmark table reports."""
+SEED = FRESH_SEED
 WALK_SEED = 0
 """The walks the laws are learnt from: those copi learn's model of what moves reads."""
 CLASSES = ("measured, followed before", "measured, first displacement",
@@ -74,10 +74,10 @@ ARMS = ("copi-predictive", "doubt", "unknown", "split", "tracked-mpc", "tracked-
 doubt); *split*: its tracker cutting arcs; tracked-mpc as registered and with split."""
 
 
-def doubt_class(rays: int, before: int, length: float, first: bool) -> int:
-    """The class of a heading (see the module): from the rays on the body now and
-    before, the length of its last displacement and whether it was its track's first."""
-    measured = rays >= WELL and before >= WELL and length > 0.05
+def doubt_class(measured: bool, first: bool) -> int:
+    """The class of a heading (see the module): whether the tracker measured it (its
+    last displacement's fits on :data:`~copi.learning._tracking.WELL` rays or more, now
+    and before: the tracker's own ``heading``) and whether it was its track's first."""
     if measured:
         return 1 if first else 0
     return 2 if first else 3
@@ -91,24 +91,24 @@ class DoubtTracker(MotionTracker):
     def __init__(self, *args: Any, mode: str | None = None, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
         self.mode = mode
-        self._last: dict[int, tuple[int, int, float]] = {}  # id: rays, class, heading
+        self._last: dict[int, tuple[int, float]] = {}  # id: class, heading
         self.classes: list[int] = []
         self.doubt_examples: list[tuple[int, float]] = []
 
     def update(self, *args: Any) -> Any:
         out = super().update(*args)
-        last: dict[int, tuple[int, int, float]] = {}
+        last: dict[int, tuple[int, float]] = {}
         self.classes = []
-        for (tid, hist, rays), t in zip(self.tracks(), self._tracks, strict=True):
+        for (tid, hist, _), t in zip(self.tracks(), self._tracks, strict=True):
             before = self._last.get(tid)
             cls, heading = -1, math.nan
             if t["known"] and before is not None:
-                cls = doubt_class(rays, before[0], t["length"], len(hist) == 2)
+                cls = doubt_class(t["heading"] is not None, len(hist) == 2)
                 heading = math.atan2(t["v"][1], t["v"][0])
-                if before[1] >= 0 and cls in (0, 1):  # the next well-measured heading
-                    turn = (heading - before[2] + math.pi) % (2 * math.pi) - math.pi
-                    self.doubt_examples.append((before[1], turn))
-            last[tid] = (rays, cls, heading)
+                if before[0] >= 0 and cls in (0, 1):  # the next well-measured heading
+                    turn = (heading - before[1] + math.pi) % (2 * math.pi) - math.pi
+                    self.doubt_examples.append((before[0], turn))
+            last[tid] = (cls, heading)
             self.classes.append(cls)
         self._last = last
         return out

@@ -7,7 +7,8 @@ from pathlib import Path
 from typing import Any
 
 __all__ = ["FRESH_SEED", "drawn_episodes", "finish_cost_figure", "kept_times",
-           "predictive_capabilities", "splice_section", "won_by_arm", "write_page"]
+           "predictive_capabilities", "splice_section", "timed_acts", "won_by_arm",
+           "write_page"]
 
 FRESH_SEED = 2
 """Episodes of a seed no method was tuned on and no benchmark table reports (the
@@ -95,6 +96,24 @@ def drawn_episodes(family: str, n: int, seed: int) -> list[Any]:
         except InvalidWorldError:
             continue
     return out
+
+
+def timed_acts(agent: Any) -> list[float]:
+    """The seconds of each call of ``agent.act`` from now on, appended as it is called
+    (``act`` wrapped in a timer, in this process)."""
+    import time
+
+    plain = agent.act
+    took: list[float] = []
+
+    def act(obs: Any) -> Any:
+        t0 = time.perf_counter()
+        move = plain(obs)
+        took.append(time.perf_counter() - t0)
+        return move
+
+    agent.act = act
+    return took
 
 
 def won_by_arm(arm: Any, arms: int, draws: int, *args: Any) -> list[Any]:

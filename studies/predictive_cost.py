@@ -28,7 +28,12 @@ from copi.learning import Capabilities  # noqa: E402
 from copi.online import PredictiveAgent  # noqa: E402
 from copi.results import paired_difference  # noqa: E402
 from copi.runs import Episode  # noqa: E402
-from studies._common import drawn_episodes, interval, predictive_capabilities  # noqa: E402
+from studies._common import (  # noqa: E402
+    drawn_episodes,
+    interval,
+    predictive_capabilities,
+    timed_acts,
+)
 
 SETTINGS = [(32, 20, 1), (32, 14, 1), (32, 12, 1), (16, 12, 1), (8, 12, 1), (16, 8, 1),
             (32, 20, 2), (32, 20, 4), (32, 20, 8), (32, 12, 4)]
@@ -43,16 +48,7 @@ def run(caps: Capabilities, samples: int, horizon: int, together: int,
         episodes: list[Episode]) -> tuple[list[bool], list[float]]:  # fmt: skip
     """Each episode's success and each decision's seconds."""
     agent = PredictiveAgent(caps, samples=samples, horizon=horizon, together=together)
-    plain = agent.act
-    took: list[float] = []
-
-    def act(obs):  # type: ignore[no-untyped-def]
-        t0 = time.perf_counter()
-        move = plain(obs)
-        took.append(time.perf_counter() - t0)
-        return move
-
-    agent.act = act  # type: ignore[method-assign]
+    took = timed_acts(agent)
     won = [e.run(agent, sensing="map").outcome == "success" for e in episodes]
     return won, took
 

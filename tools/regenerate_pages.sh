@@ -53,6 +53,7 @@ $BIN/python tools/benchmark_page.py "$R/crowd-power" docs/benchmark-crowd-fresh.
 $BIN/python studies/predictive_gap.py --episodes 800 --draws 2
 $BIN/python studies/predictive_perception.py
 $BIN/python studies/predictive_repairs.py --episodes 800 --draws 2
+$BIN/python studies/predictive_horizon.py --episodes 600 --indoor-episodes 300 --draws 2
 
 t=$(date +%s)
 $BIN/copi benchmark -o "$R/bench-ablations" --episodes 500 --workers 2 --methods ablations

@@ -23,6 +23,7 @@ that cites these planners regenerated).
 from __future__ import annotations
 
 import argparse
+import inspect
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
@@ -50,9 +51,14 @@ SEED = 1
 CHECK_SEED = 3
 """Episodes of a seed no table reports and no method was tuned on: the chosen settings'
 check."""
-PLANNERS = {"copi-predictive": ("map", (20, 14, 12, 10)), "tracked-mpc": ("map", (14, 12, 10)),
-            "model-oracle": ("oracle", (14, 12, 10))}  # fmt: skip
-"""Each planner's level and horizons, the registered one first."""
+_CLASSES = {"copi-predictive": PredictiveAgent, "tracked-mpc": TrackedMPC,
+            "model-oracle": ModelOracle}  # fmt: skip
+_SHORTER = {"copi-predictive": ("map", (14, 12, 10)), "tracked-mpc": ("map", (12, 10)),
+            "model-oracle": ("oracle", (12, 10))}  # fmt: skip
+_REGISTERED = {m: inspect.signature(c).parameters["horizon"].default for m, c in _CLASSES.items()}
+PLANNERS = {m: (level, (_REGISTERED[m], *(h for h in hs if h != _REGISTERED[m])))
+            for m, (level, hs) in _SHORTER.items()}  # fmt: skip
+"""Each planner's level and horizons, the registered one (its class's default) first."""
 FAMILIES = ("crowd", "indoor")
 
 

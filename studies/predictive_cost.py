@@ -15,6 +15,7 @@ into ``--caps`` (``copi learn --preset predictive``).
 from __future__ import annotations
 
 import argparse
+import inspect
 import sys
 import time
 from pathlib import Path
@@ -35,8 +36,8 @@ from studies._common import (  # noqa: E402
     timed_acts,
 )
 
-SETTINGS = [(32, 20, 1), (32, 14, 1), (32, 12, 1), (16, 12, 1), (8, 12, 1), (16, 8, 1),
-            (32, 20, 2), (32, 20, 4), (32, 20, 8), (32, 12, 4)]
+SETTINGS = [(32, 12, 1), (32, 20, 1), (32, 10, 1), (16, 12, 1), (8, 12, 1), (16, 10, 1),
+            (16, 8, 1), (32, 12, 2), (32, 12, 4), (32, 12, 8)]
 """(samples, horizon, together): the registered setting first. ``together`` futures are
 valued as one (:class:`copi.planning.futures.FuturesPlanner`): a way must clear the discs
 of all of them, which makes hindsight's plans less clairvoyant and fewer to solve."""
@@ -143,6 +144,11 @@ def figure(rows: list[dict], out: Path) -> None:
 
 
 def main() -> None:
+    defaults = inspect.signature(PredictiveAgent).parameters
+    registered = tuple(defaults[k].default for k in ("samples", "horizon", "together"))
+    if registered != SETTINGS[0]:
+        raise SystemExit(f"predictive_cost.py: the registered setting is {registered}, "
+                         f"the first of SETTINGS {SETTINGS[0]}: put it first")
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--episodes", type=int, default=100, help="validation episodes a family")
     ap.add_argument("--caps", default="results/tuning/capabilities-predictive.npz")
@@ -182,7 +188,8 @@ def main() -> None:
         f"validation episodes (seed {VALIDATION_SEED}, {a.episodes} a family, the families "
         "it was tuned on: [its tuning](tuning-predictive.md)), its `act` timed around each "
         "call in one process (median and mean over the decisions). Δ: success minus the "
-        "registered setting's (32 futures of 20 steps, each valued alone) on the same "
+        f"registered setting's ({SETTINGS[0][0]} futures of {SETTINGS[0][1]} steps, each valued "
+        "alone) on the same "
         "episodes, points, 95 % bootstrap interval. *Together*: futures valued as one in "
         "the planner's hindsight (a way must clear the discs of all of them; the first "
         "move's check of contact still counts each future), less clairvoyant than each "

@@ -1,23 +1,23 @@
-"""How far ahead the planners over futures should look: docs/predictive-horizon.md.
+"""How far ahead the planners over futures look: docs/predictive-horizon.md.
 
-    python studies/predictive_horizon.py --episodes 600 --draws 2
+    python studies/predictive_horizon.py --episodes 600 --indoor-episodes 300 --draws 2
 
 copi-predictive, tracked-mpc and the model-oracle share one planner
 (:class:`copi.planning.futures.FuturesPlanner`), and a decision's cost grows with its
-horizon ([what the planner costs](predictive-cost.md)). studies/tune.py chose each one's
-horizon from two values on 150 validation episodes a family with one draw of the futures,
-where an interval is about ±8 points wide. Here each planner runs at its registered
-horizon and at shorter ones on the same validation episodes (seed 1, the families the
-planners were tuned on), every episode with ``--draws`` seeds of the futures (an episode
-counts the share of them it won), its ``act`` timed around each call; success is paired
-with the registered horizon's on the same episodes (95 % bootstrap intervals).
+horizon ([what the planner costs](predictive-cost.md)). This study is their horizon's
+tuning: each planner runs at every horizon of :data:`PLANNERS` on the same validation
+episodes (seed 1, the families the planners are tuned on), every episode with
+``--draws`` seeds of the futures (an episode counts the share of them it won), its
+``act`` timed around each call; success is paired with the longest horizon's (the one
+studies/tune.py had chosen, on 150 episodes a family with one draw, before this study)
+on the same episodes (95 % bootstrap intervals). Each planner's choice is the horizon
+with the most successes over both families.
 
 A choice made on the seed it is tuned on flatters it (the best of several noisy arms is
-chosen for its noise too), so the setting each planner would choose here is run again
-beside its registered one on episodes of a seed no table reports and nothing was tuned on
-(:data:`CHECK_SEED`). Nothing here changes a registered method: the page says what a
-change of horizon would give, and what adopting it asks (the tuning redone and every page
-that cites these planners regenerated).
+chosen for its noise too), so each choice is run again beside the longest horizon on
+episodes of a seed no table reports and nothing was tuned on (:data:`CHECK_SEED`). As
+studies/tune.py does, the page says whether each registered horizon (its class's
+default) is the chosen one, and the script exits with status 1 when one is not.
 """
 
 from __future__ import annotations
@@ -53,12 +53,12 @@ CHECK_SEED = 3
 check."""
 _CLASSES = {"copi-predictive": PredictiveAgent, "tracked-mpc": TrackedMPC,
             "model-oracle": ModelOracle}  # fmt: skip
-_SHORTER = {"copi-predictive": ("map", (14, 12, 10)), "tracked-mpc": ("map", (12, 10)),
-            "model-oracle": ("oracle", (12, 10))}  # fmt: skip
-_REGISTERED = {m: inspect.signature(c).parameters["horizon"].default for m, c in _CLASSES.items()}
-PLANNERS = {m: (level, (_REGISTERED[m], *(h for h in hs if h != _REGISTERED[m])))
-            for m, (level, hs) in _SHORTER.items()}  # fmt: skip
-"""Each planner's level and horizons, the registered one (its class's default) first."""
+PLANNERS = {"copi-predictive": ("map", (20, 14, 12, 10)), "tracked-mpc": ("map", (14, 12, 10)),
+            "model-oracle": ("oracle", (14, 12, 10))}  # fmt: skip
+"""Each planner's level and horizons, the one studies/tune.py had chosen before first (the
+reference of the page's differences)."""
+REGISTERED = {m: inspect.signature(c).parameters["horizon"].default for m, c in _CLASSES.items()}
+"""Each planner's registered horizon: its class's default."""
 FAMILIES = ("crowd", "indoor")
 
 
@@ -119,11 +119,11 @@ def main() -> None:
             for h in hs]  # fmt: skip
     got = measure(jobs, a.draws, caps_path)
     # each planner's choice: the horizon of most successes over both families (the
-    # episodes summed), the registered one where none is higher
+    # episodes summed), the longer one where two tie
     chosen = {}
     for m, (_, hs) in PLANNERS.items():
         total = {h: sum(float(np.sum(got[m, h, f, SEED]["won"])) for f in FAMILIES) for h in hs}
-        chosen[m] = max(hs, key=lambda h: (total[h], h == hs[0]))
+        chosen[m] = max(hs, key=lambda h: (total[h], h))
     checks = [(m, h, "crowd", CHECK_SEED, a.episodes) for m, (_, hs) in PLANNERS.items()
               if chosen[m] != hs[0] for h in (hs[0], chosen[m])]  # fmt: skip
     got.update(measure(checks, a.draws, caps_path) if checks else {})
@@ -137,13 +137,14 @@ def main() -> None:
         f"{a.indoor_episodes} --draws {a.draws}` ({minutes:.0f} min on 2 cores). "
         "copi-predictive, tracked-mpc and the model-oracle plan with one planner, whose "
         "cost grows with its horizon ([what it costs](predictive-cost.md)); "
-        "[the tuning](tuning-predictive.md) chose each horizon from two values on 150 "
-        "validation episodes a family with one draw of the futures. Here each runs at its "
-        f"registered horizon and shorter ones on the same validation episodes (seed {SEED}: "
+        "this is their horizon's tuning (studies/tune.py, which tunes the rest, had chosen "
+        "the longest horizon of each row below from two values on 150 validation episodes "
+        "a family with one draw of the futures). Each runs at every horizon below on the "
+        f"same validation episodes (seed {SEED}: "
         f"{a.episodes} crowd, {a.indoor_episodes} indoor), every episode with {a.draws} "
         "seeds of its futures (an episode counts the share of them it won), its `act` "
         "timed around each call (median and mean over the decisions; the processes ran two "
-        "at a time). Δ: success minus the registered horizon's on the same episodes, "
+        "at a time). Δ: success minus the longest horizon's on the same episodes, "
         "points, 95 % bootstrap interval. The model-oracle runs at level `oracle` (the "
         "true present and motion law), the others at `map`.",
         "",
@@ -160,31 +161,38 @@ def main() -> None:
                 cells.append(f"{100 * np.mean(g['won']):.1f} % | "
                              f"{'—' if h == hs[0] else interval(d)} | "
                              f"{g['ms']:.2f} / {g['mean_ms']:.2f}")  # fmt: skip
-            mark = " (registered)" if h == hs[0] else ""
+            mark = " (registered)" if h == REGISTERED[m] else ""
             lines.append(f"| {m} | {h}{mark} | " + " | ".join(cells) + " |")
     lines += ["", "## The choice, checked on other episodes", "",
               "Each planner's choice on these episodes: the horizon with the most successes "
-              "over both families (the registered one where none has more). A choice made on "
+              "over both families (the longer where two tie). A choice made on "
               "the episodes it is tuned on is flattered by their noise, so each choice that "
-              "differs from the registered horizon runs again beside it on "
+              "differs from the longest horizon runs again beside it on "
               f"{a.episodes} crowd episodes of seed {CHECK_SEED} (no table reports it and "
               f"nothing was tuned on it), {a.draws} draws each.", ""]
-    lines += ["| planner | registered | chosen | seed 1 crowd: Δ | seed 1 indoor: Δ | "
-              f"seed {CHECK_SEED} crowd: registered | chosen | Δ |",
-              "|---|---|---|---|---|---|---|---|"]
+    lines += ["| planner | longest | chosen | seed 1 crowd: Δ | seed 1 indoor: Δ | "
+              f"seed {CHECK_SEED} crowd: longest | chosen | Δ | registered |",
+              "|---|---|---|---|---|---|---|---|---|"]
     for m, (_, hs) in PLANNERS.items():
         c = chosen[m]
         if c == hs[0]:
-            lines.append(f"| {m} | {hs[0]} | {c} (the same) | — | — | — | — | — |")
+            lines.append(f"| {m} | {hs[0]} | {c} (the same) | — | — | — | — | — | "
+                         f"{REGISTERED[m]} |")
             continue
         seed1 = [interval(paired_difference(got[m, c, f, SEED]["won"],
                                            got[m, hs[0], f, SEED]["won"])) for f in FAMILIES]
         r0, r1 = got[m, hs[0], "crowd", CHECK_SEED], got[m, c, "crowd", CHECK_SEED]
         lines.append(f"| {m} | {hs[0]} | {c} | {seed1[0]} | {seed1[1]} | "
                      f"{100 * np.mean(r0['won']):.1f} % | {100 * np.mean(r1['won']):.1f} % | "
-                     f"{interval(paired_difference(r1['won'], r0['won']))} |")  # fmt: skip
+                     f"{interval(paired_difference(r1['won'], r0['won']))} | "
+                     f"{REGISTERED[m]} |")  # fmt: skip
     lines.append("")
     write_page(a.out, lines)
+    stale = [m for m in PLANNERS if REGISTERED[m] != chosen[m]]
+    if stale:
+        print("predictive_horizon.py: registered horizons differ from the chosen ones "
+              f"(change the class defaults): {', '.join(stale)}", file=sys.stderr)
+        sys.exit(1)
 
 
 if __name__ == "__main__":

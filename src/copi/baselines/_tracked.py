@@ -68,7 +68,8 @@ class TrackedMPC(ModelOracle):
     is planning against the discs' futures, which a map-level agent can do, and how
     much is knowing the present exactly, which it cannot. Nothing in it is learnt
     offline; the planner's parameters are the model-oracle's (tuned at level
-    ``oracle`` on seed 1).
+    ``oracle`` on seed 1) but for its horizon of 12 steps, chosen for it on validation
+    episodes (docs/predictive-horizon.md).
 
     Parameters
     ----------
@@ -93,7 +94,7 @@ class TrackedMPC(ModelOracle):
         speed: float = 0.7,
         turn_sd: float = 1.0,
         samples: int = 32,
-        horizon: int = 14,
+        horizon: int = 12,
         plan: str = "hindsight",
         loss: float = 200.0,
         margin: float = 0.1,

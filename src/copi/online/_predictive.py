@@ -93,9 +93,10 @@ class PredictiveAgent(Agent):
         Learnt with a model of what moves and safety priors (``copi learn --preset
         predictive``).
     samples, horizon, loss, margin, escape, together : see :class:`FuturesPlanner`
-        (the model-oracle's settings, but a horizon of 20 steps: the best of six
-        settings on validation seed 1, docs/tuning-predictive.md; each future valued
-        alone, as the model-oracle does).
+        (the model-oracle's settings, but a horizon of 12 steps: the most successes of
+        four horizons on 600 crowd and 300 indoor validation episodes with two draws of
+        the futures, docs/predictive-horizon.md; each future valued alone, as the
+        model-oracle does).
     alpha, beta : float
         Weights, in steps, of the learnt safety network and of the template priors.
     split : bool
@@ -114,7 +115,7 @@ class PredictiveAgent(Agent):
         *,
         name: str = "copi-predictive",
         samples: int = 32,
-        horizon: int = 20,
+        horizon: int = 12,
         alpha: float = 1.0,
         beta: float = 0.0,
         loss: float = 200.0,

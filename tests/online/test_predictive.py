@@ -172,9 +172,10 @@ def test_watch_draws_what_it_expected(predictive_caps: Path, tmp_path: Path) -> 
     watched = watch_episode("copi-predictive", caps, family="crowd", episode=1, seed=1,
                             max_steps=30)  # fmt: skip
     step = watched.steps[0]
-    assert "futures of 20 steps drawn from the learnt model" in step.text
+    h = PredictiveAgent(caps).planner.horizon
+    assert f"futures of {h} steps drawn from the learnt model" in step.text
     assert "expected cost (steps) of the best moves" in step.text
-    assert step.futures is not None and step.futures.shape[1] == 21
+    assert step.futures is not None and step.futures.shape[1] == h + 1
     assert step.futures.shape[2] >= 1  # the bodies it made out
     plain = save_watch(watched, tmp_path / "ep.png")
     from PIL import Image

@@ -1,8 +1,8 @@
 """The hindsight values of :class:`copi.planning.futures.FuturesPlanner`: a window of cells
 valued against sampled futures of moving discs, each future solved as if known.
 
-Why by hand: each decision solves a window of a few thousand cells over 20 steps in each
-of 32 futures; no library solves many small time-expanded grids at once, and a general
+Why by hand: each decision solves a window of a few thousand cells over 10 to 20 steps in
+each of 32 futures; no library solves many small time-expanded grids at once, and a general
 shortest-path search (networkx, scipy.sparse.csgraph) would rebuild a graph per future.
 """
 

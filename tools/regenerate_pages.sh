@@ -21,6 +21,8 @@ took() { local s=$(( $(date +%s) - $1 )); echo "$((s / 60)) min $((s % 60)) s"; 
 
 t=$(date +%s)
 $BIN/python studies/tune.py --episodes 100 --workers 2
+$BIN/python studies/tune.py --methods copi-predictive --families crowd,indoor --episodes 150 \
+    --out docs/tuning-predictive.md
 
 t=$(date +%s)
 $BIN/copi reproduce -o "$R/"
@@ -32,6 +34,8 @@ $BIN/python tools/report_page.py "$R/report.md" docs/reproduce.md \
 $BIN/python studies/ceilings.py --bench "$R/ceilings" --episodes 200 --oracle-episodes 200
 # on the ceilings' store: the bounds page with the RL rows (its rl.md is overwritten next)
 $BIN/python studies/rl_experiments.py --bench "$R/ceilings" --episodes 200 --games 200
+# the ceilings page again, on the store the RL rows are in now (it resumes: no episode reruns)
+$BIN/python studies/ceilings.py --bench "$R/ceilings" --episodes 200 --oracle-episodes 200
 $BIN/python studies/rl_experiments.py --bench "$R/rl-bench" --episodes 200 --games 200
 
 t=$(date +%s)
@@ -54,6 +58,17 @@ $BIN/python studies/predictive_gap.py --episodes 800 --draws 2
 $BIN/python studies/predictive_perception.py
 $BIN/python studies/predictive_repairs.py --episodes 800 --draws 2
 $BIN/python studies/predictive_horizon.py --episodes 600 --indoor-episodes 300 --draws 2
+$BIN/python studies/predictive_failures.py --episodes 200
+$BIN/python studies/predictive_cost.py --episodes 100
+
+t=$(date +%s)
+S=copi-learnt@sensor,copi-predictive@sensor,compass-guard@sensor,straight@sensor
+S=$S,copi-learnt@sensor:mapping,compass-guard@sensor:mapping,copi-predictive@sensor:mapping
+$BIN/copi benchmark -o "$R/predictive-sensor" --families star,polygon,indoor,maps,crowd \
+    --methods "$S" --against copi-learnt --episodes 200 --seed 0 --workers 2
+$BIN/python tools/benchmark_page.py "$R/predictive-sensor" docs/benchmark-sensor.md \
+    --what "level \`sensor\`: no map, no position; copi-predictive beside copi-learnt" --against copi-learnt \
+    --command "\`copi benchmark -o results/predictive-sensor --families star,polygon,indoor,maps,crowd --methods $S --against copi-learnt --episodes 200 --seed 0 --workers 2\` (seed 0; $(took "$t") on 2 cores; copi-predictive finds its own way at \`sensor\`, so its two rows are the same episodes run twice, each paired with copi-learnt under that strategy)"
 
 t=$(date +%s)
 $BIN/copi benchmark -o "$R/bench-ablations" --episodes 500 --workers 2 --methods ablations
